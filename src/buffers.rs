@@ -1,0 +1,360 @@
+//! The contract between the two tracers: the flat `#[repr(C)]` structs that both
+//! `shaders/trace.wgsl` and `src/cpu/trace.rs` read, and the flattening of a [`Scene`]
+//! into them.
+//!
+//! Every struct here names the WGSL struct it must match; `tests/layout.rs` parses the
+//! shader with naga and checks each size and field offset against `size_of`/`offset_of!`.
+//! WGSL's `vec3<f32>` is 16-byte aligned, so each `[f32; 3]` is followed by a 4-byte field
+//! or an explicit `_pad`.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::scene::{Model, Scene, TriangleAlgorithm};
+
+/// Material model `ambient`: only Ia·ka.
+pub const MODEL_AMBIENT: u32 = 0;
+/// Material model `diffuse`: ambient + diffuse.
+pub const MODEL_DIFFUSE: u32 = 1;
+/// Material model `phong`: ambient + diffuse + specular.
+pub const MODEL_PHONG: u32 = 2;
+
+/// `TRIANGLE_ALGO` for the seed's plane + barycentric test.
+pub const TRIANGLE_NAIVE: u32 = 0;
+/// `TRIANGLE_ALGO` for Möller–Trumbore.
+pub const TRIANGLE_MOLLER_TRUMBORE: u32 = 1;
+/// `TRIANGLE_ALGO` for the watertight test of Woop, Benthin and Wald.
+pub const TRIANGLE_WATERTIGHT: u32 = 2;
+
+/// `Hit::prim` of a miss.
+pub const PRIM_NONE: u32 = 0xffff_ffff;
+/// Set in `Hit::prim` when the index is a triangle's (else it is a sphere's).
+pub const TRIANGLE_BIT: u32 = 0x8000_0000;
+
+/// The `t` of "no hit yet": `f32::MAX`, so that every finite hit beats it and no
+/// arithmetic on it makes an infinity. WGSL: `INFINITY`.
+pub const INFINITY: f32 = f32::MAX;
+
+/// The relative size of a shadow ray's offset along the normal, in units of the hit
+/// point's largest coordinate (at least 1): 64 ε of f32, about 7.6e-6. WGSL: `SHADOW_EPSILON * 64`.
+pub const SHADOW_EPSILON: f32 = f32::EPSILON;
+
+/// Veltkamp's splitter for f32 (2^12 + 1), used by Dekker's exact product. WGSL: `SPLITTER`.
+pub const SPLITTER: f32 = 4097.0;
+
+/// Per-frame constants. Must match WGSL `struct Params` (128 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Params {
+    /// Camera position. Offset 0.
+    pub eye: [f32; 3],
+    /// Image width in pixels. Offset 12.
+    pub width: u32,
+    /// Unit view direction. Offset 16.
+    pub forward: [f32; 3],
+    /// Image height in pixels. Offset 28.
+    pub height: u32,
+    /// Unit right vector. Offset 32.
+    pub right: [f32; 3],
+    /// tan(fov / 2), computed in Rust. Offset 44.
+    pub tan_half: f32,
+    /// Camera up, `cross(right, forward)`. Offset 48.
+    pub up: [f32; 3],
+    /// width / height. Offset 60.
+    pub aspect: f32,
+    /// Ia. Offset 64.
+    pub ambient: [f32; 3],
+    /// Number of spheres in use. Offset 76.
+    pub n_spheres: u32,
+    /// Colour of rays that hit nothing. Offset 80.
+    pub background: [f32; 3],
+    /// Number of triangles in use. Offset 92.
+    pub n_triangles: u32,
+    /// Number of lights. Offset 96.
+    pub n_lights: u32,
+    /// Left column of the tile being rendered. Offset 100.
+    pub tile_x: u32,
+    /// Top row of the tile being rendered. Offset 104.
+    pub tile_y: u32,
+    /// Tile width in pixels. Offset 108.
+    pub tile_width: u32,
+    /// Tile height in pixels. Offset 112.
+    pub tile_height: u32,
+    /// Offset 116.
+    pub _pad0: u32,
+    /// Offset 120.
+    pub _pad1: u32,
+    /// Offset 124.
+    pub _pad2: u32,
+}
+
+/// A sphere. Must match WGSL `struct Sphere` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Sphere {
+    /// Centre. Offset 0.
+    pub center: [f32; 3],
+    /// Radius, > 0. Offset 12.
+    pub radius: f32,
+    /// Index into the material buffer. Offset 16.
+    pub material: u32,
+    /// Offset 20.
+    pub _pad0: u32,
+    /// Offset 24.
+    pub _pad1: u32,
+    /// Offset 28.
+    pub _pad2: u32,
+}
+
+/// A triangle. Must match WGSL `struct Triangle` (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Triangle {
+    /// First vertex. Offset 0.
+    pub a: [f32; 3],
+    /// Index into the material buffer. Offset 12.
+    pub material: u32,
+    /// Second vertex. Offset 16.
+    pub b: [f32; 3],
+    /// Offset 28.
+    pub _pad0: u32,
+    /// Third vertex. Offset 32.
+    pub c: [f32; 3],
+    /// Offset 44.
+    pub _pad1: u32,
+}
+
+/// A material. Must match WGSL `struct Material` (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Material {
+    /// Ambient reflectance. Offset 0.
+    pub ka: [f32; 3],
+    /// `MODEL_AMBIENT`, `MODEL_DIFFUSE` or `MODEL_PHONG`. Offset 12.
+    pub model: u32,
+    /// Diffuse reflectance. Offset 16.
+    pub kd: [f32; 3],
+    /// Phong exponent. Offset 28.
+    pub n: f32,
+    /// Specular reflectance. Offset 32.
+    pub ks: [f32; 3],
+    /// `n` as an integer when it is one (0..=2^24), else −1: then the power is taken by
+    /// squaring, identically on both tracers. Offset 44.
+    pub n_int: i32,
+}
+
+/// A point light. Must match WGSL `struct Light` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    /// Position. Offset 0.
+    pub position: [f32; 3],
+    /// Offset 12.
+    pub _pad0: u32,
+    /// Colour, Ip. Offset 16.
+    pub color: [f32; 3],
+    /// Offset 28.
+    pub _pad1: u32,
+}
+
+/// A ray for the `query` entry point. Must match WGSL `struct RayIn` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RayIn {
+    /// Origin. Offset 0.
+    pub origin: [f32; 3],
+    /// Hits at t ≤ t_min are ignored. Offset 12.
+    pub t_min: f32,
+    /// Direction (any length). Offset 16.
+    pub dir: [f32; 3],
+    /// Hits at t ≥ t_max are ignored. Offset 28.
+    pub t_max: f32,
+}
+
+/// The answer to one query ray. Must match WGSL `struct HitOut` (16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct HitOut {
+    /// Distance along the ray (in units of |dir|); t_max on a miss. Offset 0.
+    pub t: f32,
+    /// Primitive index, with `TRIANGLE_BIT` for triangles; `PRIM_NONE` on a miss. Offset 4.
+    pub prim: u32,
+    /// Barycentric weight of vertex b (triangles). Offset 8.
+    pub u: f32,
+    /// Barycentric weight of vertex c (triangles). Offset 12.
+    pub v: f32,
+}
+
+/// Everything a tracer reads, flattened: what goes into the GPU's buffers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneBuffers {
+    /// Per-frame constants (the tile fields cover the whole image).
+    pub params: Params,
+    /// Spheres, in scene order.
+    pub spheres: Vec<Sphere>,
+    /// Triangles: the scene's own, then each mesh's.
+    pub triangles: Vec<Triangle>,
+    /// Materials, in the order of their first definition.
+    pub materials: Vec<Material>,
+    /// Point lights.
+    pub lights: Vec<Light>,
+    /// The triangle algorithm (`TRIANGLE_*`).
+    pub triangle_algo: u32,
+    /// Whether shadow rays are traced.
+    pub shadows: bool,
+}
+
+/// The integer form of a Phong exponent for `Material::n_int`.
+pub fn exponent_as_int(n: f32) -> i32 {
+    if n >= 0.0 && n <= 16_777_216.0 && n.fract() == 0.0 {
+        n as i32
+    } else {
+        -1
+    }
+}
+
+/// The camera basis of SPEC.md in f32, evaluated left to right: (forward, right, up').
+pub fn camera_basis(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> [[f32; 3]; 3] {
+    use crate::cpu::real::V3;
+    crate::cpu::camera_basis::<f32>(V3::from(eye), V3::from(look_at), V3::from(up)).map(Into::into)
+}
+
+impl SceneBuffers {
+    /// Flattens a validated scene at `width`×`height` pixels with the given triangle algorithm.
+    pub fn new(scene: &Scene, width: u32, height: u32, algo: TriangleAlgorithm) -> Self {
+        let cam = &scene.camera;
+        let [forward, right, up] = camera_basis(cam.eye, cam.look_at, cam.up);
+        let params = Params {
+            eye: cam.eye,
+            width,
+            forward,
+            height,
+            right,
+            tan_half: (cam.fov.to_radians() / 2.0).tan(),
+            up,
+            aspect: width as f32 / height as f32,
+            ambient: scene.ambient,
+            n_spheres: scene.spheres.len() as u32,
+            background: scene.background,
+            n_triangles: scene.triangles.len() as u32,
+            n_lights: scene.lights.len() as u32,
+            tile_x: 0,
+            tile_y: 0,
+            tile_width: width,
+            tile_height: height,
+            ..Params::default()
+        };
+        let materials = scene
+            .materials
+            .iter()
+            .map(|m| Material {
+                ka: m.ka,
+                model: match m.model {
+                    Model::Ambient => MODEL_AMBIENT,
+                    Model::Diffuse => MODEL_DIFFUSE,
+                    Model::Phong => MODEL_PHONG,
+                },
+                kd: m.kd,
+                n: m.n,
+                ks: m.ks,
+                n_int: exponent_as_int(m.n),
+            })
+            .collect();
+        let spheres = scene
+            .spheres
+            .iter()
+            .map(|s| Sphere {
+                center: s.center,
+                radius: s.radius,
+                material: s.material,
+                ..Sphere::default()
+            })
+            .collect();
+        let triangles = scene
+            .triangles
+            .iter()
+            .map(|t| Triangle {
+                a: t.vertices[0],
+                material: t.material,
+                b: t.vertices[1],
+                c: t.vertices[2],
+                ..Triangle::default()
+            })
+            .collect();
+        let lights = scene
+            .lights
+            .iter()
+            .map(|l| Light {
+                position: l.position,
+                color: l.color,
+                ..Light::default()
+            })
+            .collect();
+        SceneBuffers {
+            params,
+            spheres,
+            triangles,
+            materials,
+            lights,
+            triangle_algo: algo.code(),
+            shadows: scene.shadows,
+        }
+    }
+}
+
+/// The pipeline's override constants: what the compiled shader contains. Must match the
+/// `override` declarations at the top of `shaders/trace.wgsl`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Specialisation {
+    /// WGSL `HAS_SPHERES`.
+    pub has_spheres: bool,
+    /// WGSL `HAS_TRIANGLES`.
+    pub has_triangles: bool,
+    /// WGSL `TRIANGLE_ALGO` (`TRIANGLE_*`).
+    pub triangle_algo: u32,
+    /// WGSL `USES_DIFFUSE`.
+    pub uses_diffuse: bool,
+    /// WGSL `USES_PHONG`.
+    pub uses_phong: bool,
+    /// WGSL `SHADOWS`.
+    pub shadows: bool,
+}
+
+impl Specialisation {
+    /// Only what `buf` uses: "model only what a scene needs".
+    pub fn for_scene(buf: &SceneBuffers) -> Self {
+        Specialisation {
+            has_spheres: !buf.spheres.is_empty(),
+            has_triangles: !buf.triangles.is_empty(),
+            triangle_algo: buf.triangle_algo,
+            uses_diffuse: buf.materials.iter().any(|m| m.model != MODEL_AMBIENT),
+            uses_phong: buf.materials.iter().any(|m| m.model == MODEL_PHONG),
+            shadows: buf.shadows,
+        }
+    }
+
+    /// Everything compiled in (the one triangle algorithm still chosen): the general
+    /// pipeline that the benchmark sets beside the specialised one.
+    pub fn general(buf: &SceneBuffers) -> Self {
+        Specialisation {
+            has_spheres: true,
+            has_triangles: true,
+            triangle_algo: buf.triangle_algo,
+            uses_diffuse: true,
+            uses_phong: true,
+            shadows: buf.shadows,
+        }
+    }
+
+    /// The `(name, value)` pairs for `PipelineCompilationOptions::constants`.
+    pub fn constants(&self) -> [(&'static str, f64); 6] {
+        let b = |x: bool| if x { 1.0 } else { 0.0 };
+        [
+            ("HAS_SPHERES", b(self.has_spheres)),
+            ("HAS_TRIANGLES", b(self.has_triangles)),
+            ("TRIANGLE_ALGO", self.triangle_algo as f64),
+            ("USES_DIFFUSE", b(self.uses_diffuse)),
+            ("USES_PHONG", b(self.uses_phong)),
+            ("SHADOWS", b(self.shadows)),
+        ]
+    }
+}

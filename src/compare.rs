@@ -1,0 +1,89 @@
+//! Metrics between two images of the same size.
+
+use crate::image::{Image, to_u8};
+
+/// How two images differ.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Diff {
+    /// Pixels compared.
+    pub pixels: usize,
+    /// Pixels whose 8-bit colour differs in some channel.
+    pub differing_pixels: usize,
+    /// Pixels whose f32 colour differs in some bit (stricter than the 8-bit count).
+    pub differing_bits: usize,
+    /// Pixels that one image hit and the other missed.
+    pub hit_miss: usize,
+    /// Largest channel difference, linear [0, 1] units.
+    pub max_abs: f64,
+    /// Root mean square channel difference.
+    pub rms: f64,
+    /// Mean channel difference.
+    pub mean_abs: f64,
+    /// Largest 8-bit channel difference.
+    pub max_u8: u8,
+}
+
+/// Compares `a` with `b` (their sizes must match).
+pub fn diff(a: &Image, b: &Image) -> Diff {
+    assert_eq!(
+        (a.width, a.height),
+        (b.width, b.height),
+        "images of different sizes"
+    );
+    let mut d = Diff {
+        pixels: a.pixels.len(),
+        ..Diff::default()
+    };
+    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        let mut off8 = false;
+        let mut off_bits = false;
+        for c in 0..3 {
+            let e = (p[c] as f64 - q[c] as f64).abs();
+            let e = if e.is_nan() { 1.0 } else { e };
+            sum += e;
+            sum2 += e * e;
+            d.max_abs = d.max_abs.max(e);
+            let (x, y) = (to_u8(p[c]), to_u8(q[c]));
+            d.max_u8 = d.max_u8.max(x.abs_diff(y));
+            off8 |= x != y;
+            off_bits |= p[c].to_bits() != q[c].to_bits();
+        }
+        d.differing_pixels += off8 as usize;
+        d.differing_bits += off_bits as usize;
+        d.hit_miss += ((p[3] >= 0.0) != (q[3] >= 0.0)) as usize;
+    }
+    let n = (3 * d.pixels).max(1) as f64;
+    d.mean_abs = sum / n;
+    d.rms = (sum2 / n).sqrt();
+    d
+}
+
+/// A picture of where `a` and `b` differ: black where equal in 8 bits, red where only the
+/// colour differs (brighter for larger differences), white where hit and miss disagree.
+pub fn diff_image(a: &Image, b: &Image) -> Image {
+    let pixels = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(p, q)| {
+            if (p[3] >= 0.0) != (q[3] >= 0.0) {
+                return [1.0, 1.0, 1.0, 0.0];
+            }
+            let m = (0..3)
+                .map(|c| to_u8(p[c]).abs_diff(to_u8(q[c])))
+                .max()
+                .unwrap_or(0);
+            if m == 0 {
+                [0.0, 0.0, 0.0, 0.0]
+            } else {
+                [0.25 + 0.75 * (m as f32 / 255.0).sqrt(), 0.0, 0.0, 0.0]
+            }
+        })
+        .collect();
+    Image {
+        width: a.width,
+        height: a.height,
+        pixels,
+    }
+}

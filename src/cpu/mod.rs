@@ -1,0 +1,100 @@
+//! The CPU tracers: the f32 mirror of the shader and the f64 ground truth, both from the
+//! one generic `trace.rs`, rows in parallel with rayon.
+
+pub mod real;
+pub mod trace;
+
+use rayon::prelude::*;
+
+use crate::buffers::{HitOut, RayIn, SceneBuffers, Specialisation};
+use crate::image::Image;
+use crate::scene::Scene;
+use real::{Real, V3};
+use trace::{Camera, Globals};
+
+/// SPEC.md's camera basis, evaluated left to right: `[forward, right, up']`.
+pub fn camera_basis<R: Real>(eye: V3<R>, look_at: V3<R>, up: V3<R>) -> [V3<R>; 3] {
+    let forward = (look_at - eye).normalize();
+    let right = forward.cross(up).normalize();
+    let up2 = right.cross(forward);
+    [forward, right, up2]
+}
+
+fn render_with<R: Real>(g: &Globals<R>) -> Image {
+    let (w, h) = (g.cam.width, g.cam.height);
+    let mut pixels = vec![[0.0f32; 4]; w as usize * h as usize];
+    pixels
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .for_each(|(j, row)| {
+            for (i, px) in row.iter_mut().enumerate() {
+                let c = trace::trace_pixel(g, i as u32, j as u32);
+                *px = c.map(|x| x.to_f32());
+            }
+        });
+    Image {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
+/// Renders with the f32 mirror of `trace.wgsl`, specialised as the GPU would be.
+pub fn render_f32(buf: &SceneBuffers, spec: Specialisation) -> Image {
+    let g = Globals {
+        cam: Camera::from_params(&buf.params),
+        buf,
+        spec,
+    };
+    render_with(&g)
+}
+
+/// Renders the f64 ground truth: the same algorithms with the camera basis, every
+/// intersection and the shading in f64 (inputs widened exactly from the f32 scene).
+pub fn render_f64(scene: &Scene, buf: &SceneBuffers, spec: Specialisation) -> Image {
+    let c = &scene.camera;
+    let [forward, right, up] = camera_basis::<f64>(
+        V3::from_f32(c.eye),
+        V3::from_f32(c.look_at),
+        V3::from_f32(c.up),
+    );
+    let (w, h) = (buf.params.width, buf.params.height);
+    let cam = Camera {
+        eye: V3::from_f32(c.eye),
+        forward,
+        right,
+        up,
+        tan_half: ((c.fov as f64).to_radians() / 2.0).tan(),
+        aspect: w as f64 / h as f64,
+        width: w,
+        height: h,
+    };
+    render_with(&Globals { cam, buf, spec })
+}
+
+/// The `query` entry point on the CPU, in f32 (the shader's twin) over many rays.
+pub fn query_f32(buf: &SceneBuffers, spec: Specialisation, rays: &[RayIn]) -> Vec<HitOut> {
+    let g = Globals {
+        cam: Camera::from_params(&buf.params),
+        buf,
+        spec,
+    };
+    rays.par_iter().map(|r| trace::query(&g, r)).collect()
+}
+
+/// The `query` entry point in f64 (the same algorithm, widened).
+pub fn query_f64(buf: &SceneBuffers, spec: Specialisation, rays: &[RayIn]) -> Vec<HitOut> {
+    let p = &buf.params;
+    let cam = Camera {
+        eye: V3::from_f32(p.eye),
+        forward: V3::from_f32(p.forward),
+        right: V3::from_f32(p.right),
+        up: V3::from_f32(p.up),
+        tan_half: p.tan_half as f64,
+        aspect: p.aspect as f64,
+        width: p.width,
+        height: p.height,
+    };
+    let g = Globals { cam, buf, spec };
+    rays.par_iter().map(|r| trace::query(&g, r)).collect()
+}

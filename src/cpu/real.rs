@@ -1,0 +1,201 @@
+//! The arithmetic the CPU tracer is written in: a scalar [`Real`] (f32 to mirror the
+//! shader, f64 for the ground truth) and a three-vector [`V3`] whose every operation is
+//! written out in WGSL's order.
+//!
+//! Why not glam: glam's `Vec3` is fine arithmetic, but the order of its operations is its
+//! own business and may change; here `dot` is `x·x' + y·y' + z·z'` left to right and
+//! `normalize` is `v * (1 / sqrt(dot(v, v)))`, which is what lavapipe does for WGSL's
+//! `dot` and `normalize` (checked by `tests/primitives.rs`).
+
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+/// A float type the CPU tracer can run in: f32 (the shader's mirror) or f64 (the reference).
+pub trait Real:
+    Copy
+    + PartialOrd
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// 0.
+    const ZERO: Self;
+    /// 1.
+    const ONE: Self;
+    /// The `t` of "no hit yet" (`buffers::INFINITY` for f32, `f64::MAX` for f64).
+    const INFINITY: Self;
+    /// Veltkamp's splitter, 2^(p/2) + 1 for p bits of mantissa.
+    const SPLITTER: Self;
+    /// The relative shadow-ray offset unit (machine epsilon).
+    const EPSILON: Self;
+    /// Exact conversion from f32.
+    fn from_f32(x: f32) -> Self;
+    /// Conversion from u32 (exact below 2^24 for f32).
+    fn from_u32(x: u32) -> Self;
+    /// Conversion to f32 (rounding).
+    fn to_f32(self) -> f32;
+    /// Correctly rounded square root.
+    fn sqrt(self) -> Self;
+    /// Absolute value.
+    fn abs(self) -> Self;
+    /// `self^e` (libm's `pow`).
+    fn powf(self, e: Self) -> Self;
+}
+
+impl Real for f32 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const INFINITY: Self = crate::buffers::INFINITY;
+    const SPLITTER: Self = crate::buffers::SPLITTER;
+    const EPSILON: Self = crate::buffers::SHADOW_EPSILON;
+    fn from_f32(x: f32) -> Self {
+        x
+    }
+    fn from_u32(x: u32) -> Self {
+        x as f32
+    }
+    fn to_f32(self) -> f32 {
+        self
+    }
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    fn powf(self, e: Self) -> Self {
+        f32::powf(self, e)
+    }
+}
+
+impl Real for f64 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const INFINITY: Self = f64::MAX;
+    const SPLITTER: Self = 134_217_729.0; // 2^27 + 1
+    const EPSILON: Self = f64::EPSILON;
+    fn from_f32(x: f32) -> Self {
+        x as f64
+    }
+    fn from_u32(x: u32) -> Self {
+        x as f64
+    }
+    fn to_f32(self) -> f32 {
+        self as f32
+    }
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    fn abs(self) -> Self {
+        f64::abs(self)
+    }
+    fn powf(self, e: Self) -> Self {
+        f64::powf(self, e)
+    }
+}
+
+/// A three-vector in WGSL's order of operations.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct V3<R> {
+    /// x.
+    pub x: R,
+    /// y.
+    pub y: R,
+    /// z.
+    pub z: R,
+}
+
+impl<R: Real> V3<R> {
+    /// `vec3(x, y, z)`.
+    pub fn new(x: R, y: R, z: R) -> Self {
+        V3 { x, y, z }
+    }
+    /// `vec3(s)`.
+    pub fn splat(s: R) -> Self {
+        V3 { x: s, y: s, z: s }
+    }
+    /// Widens an f32 array.
+    pub fn from_f32(a: [f32; 3]) -> Self {
+        V3::new(R::from_f32(a[0]), R::from_f32(a[1]), R::from_f32(a[2]))
+    }
+    /// Narrows to an f32 array.
+    pub fn to_f32(self) -> [f32; 3] {
+        [self.x.to_f32(), self.y.to_f32(), self.z.to_f32()]
+    }
+    /// WGSL `dot`: x·x' + y·y' + z·z', left to right.
+    pub fn dot(self, o: Self) -> R {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    /// WGSL `cross3` (glint's written-out cross product).
+    pub fn cross(self, o: Self) -> Self {
+        V3::new(
+            self.y * o.z - self.z * o.y,
+            self.z * o.x - self.x * o.z,
+            self.x * o.y - self.y * o.x,
+        )
+    }
+    /// WGSL `normalize` as lavapipe computes it: v · (1 / √(v·v)).
+    pub fn normalize(self) -> Self {
+        let s = R::ONE / self.dot(self).sqrt();
+        self * s
+    }
+    /// `v[k]` for k in 0..3 (WGSL's dynamic vector index).
+    pub fn get(self, k: u32) -> R {
+        match k {
+            0 => self.x,
+            1 => self.y,
+            _ => self.z,
+        }
+    }
+}
+
+impl From<[f32; 3]> for V3<f32> {
+    fn from(a: [f32; 3]) -> Self {
+        V3::new(a[0], a[1], a[2])
+    }
+}
+
+impl From<V3<f32>> for [f32; 3] {
+    fn from(v: V3<f32>) -> Self {
+        [v.x, v.y, v.z]
+    }
+}
+
+impl<R: Real> Add for V3<R> {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        V3::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+
+impl<R: Real> Sub for V3<R> {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        V3::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+
+impl<R: Real> Mul for V3<R> {
+    type Output = Self;
+    fn mul(self, o: Self) -> Self {
+        V3::new(self.x * o.x, self.y * o.y, self.z * o.z)
+    }
+}
+
+impl<R: Real> Mul<R> for V3<R> {
+    type Output = Self;
+    fn mul(self, s: R) -> Self {
+        V3::new(self.x * s, self.y * s, self.z * s)
+    }
+}
+
+impl<R: Real> Neg for V3<R> {
+    type Output = Self;
+    fn neg(self) -> Self {
+        V3::new(-self.x, -self.y, -self.z)
+    }
+}

@@ -1,0 +1,484 @@
+//! The compiled kernel: the shader module, one pipeline per [`Specialisation`] and entry
+//! point, the upload, the dispatch in tiles, and the readback.
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use bytemuck::Pod;
+use wgpu::util::DeviceExt;
+
+use super::{GpuError, SHADER_SOURCE};
+use crate::buffers::{HitOut, Params, RayIn, SceneBuffers, Specialisation};
+use crate::image::Image;
+
+/// `@workgroup_size` of `render` in x and y.
+pub const RENDER_WORKGROUP: u32 = 8;
+/// `@workgroup_size` of `query` in x.
+pub const QUERY_WORKGROUP: u32 = 64;
+/// Most pixels in one dispatch (16 bytes each): small enough for every device's storage
+/// buffer limit and for a display driver's watchdog, large enough to keep a GPU busy.
+pub const MAX_TILE_PIXELS: u64 = 1 << 22;
+/// How long one wait for the GPU may take before the render is abandoned as hung.
+pub const GPU_TIMEOUT: Duration = Duration::from_secs(600);
+
+/// Where the GPU's time went, apart.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GpuTimings {
+    /// Creating the compute pipeline (shader compile), zero when it was cached.
+    pub compile: Duration,
+    /// Creating and filling the scene buffers.
+    pub upload: Duration,
+    /// The dispatches, until the GPU finished.
+    pub trace: Duration,
+    /// Copying and mapping the output back.
+    pub readback: Duration,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+enum Entry {
+    Render,
+    Query,
+}
+
+/// The shader module with its layouts and a cache of specialised pipelines.
+pub struct Kernel {
+    module: wgpu::ShaderModule,
+    render_layout: wgpu::BindGroupLayout,
+    query_layout: wgpu::BindGroupLayout,
+    render_pipeline_layout: wgpu::PipelineLayout,
+    query_pipeline_layout: wgpu::PipelineLayout,
+    pipelines: Mutex<HashMap<(Specialisation, Entry), wgpu::ComputePipeline>>,
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn scene_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
+    let mut v = vec![wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(size_of::<Params>() as u64),
+        },
+        count: None,
+    }];
+    v.extend((1..=4).map(|b| storage_entry(b, true)));
+    v
+}
+
+/// Waits for the GPU, turning a hang or a lost device into an error.
+fn wait(device: &wgpu::Device, during: &'static str) -> Result<(), GpuError> {
+    match device.poll(wgpu::PollType::Wait {
+        submission_index: None,
+        timeout: Some(GPU_TIMEOUT),
+    }) {
+        Ok(_) => Ok(()),
+        Err(wgpu::PollError::Timeout) => Err(GpuError::Timeout {
+            during,
+            seconds: GPU_TIMEOUT.as_secs(),
+        }),
+        Err(e) => Err(GpuError::Runtime {
+            during,
+            message: e.to_string(),
+        }),
+    }
+}
+
+/// Runs `f` inside error scopes for validation and out-of-memory errors.
+fn scoped<T>(
+    device: &wgpu::Device,
+    during: &'static str,
+    f: impl FnOnce() -> T,
+) -> Result<T, GpuError> {
+    let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let val = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let out = f();
+    let v = pollster::block_on(val.pop());
+    let o = pollster::block_on(oom.pop());
+    match v.or(o) {
+        None => Ok(out),
+        Some(e) => Err(GpuError::Runtime {
+            during,
+            message: e.to_string(),
+        }),
+    }
+}
+
+/// A storage buffer holding `data`, or one zeroed element when `data` is empty (WGSL has
+/// no empty bindings). Fails when the device's limits are smaller than the data.
+fn storage_buffer<T: Pod + Default>(
+    device: &wgpu::Device,
+    what: &'static str,
+    data: &[T],
+    usage: wgpu::BufferUsages,
+) -> Result<wgpu::Buffer, GpuError> {
+    let one = [T::default()];
+    let data = if data.is_empty() { &one[..] } else { data };
+    let bytes: &[u8] = bytemuck::cast_slice(data);
+    check_size(device, what, bytes.len() as u64)?;
+    Ok(
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(what),
+            contents: bytes,
+            usage: wgpu::BufferUsages::STORAGE | usage,
+        }),
+    )
+}
+
+fn check_size(device: &wgpu::Device, what: &'static str, needed: u64) -> Result<(), GpuError> {
+    let l = device.limits();
+    let limit = (l.max_storage_buffer_binding_size as u64).min(l.max_buffer_size);
+    if needed > limit {
+        return Err(GpuError::TooLarge {
+            what,
+            needed,
+            limit,
+        });
+    }
+    Ok(())
+}
+
+/// The rows of each tile of a `width`×`height` frame, within the device's limits.
+pub fn tile_rows(device: &wgpu::Device, width: u32, height: u32) -> u32 {
+    let l = device.limits();
+    let bytes = (l.max_storage_buffer_binding_size as u64).min(l.max_buffer_size);
+    let max_pixels = (bytes / 16).min(MAX_TILE_PIXELS);
+    let by_pixels = (max_pixels / width as u64).max(1);
+    let by_dispatch = l.max_compute_workgroups_per_dimension as u64 * RENDER_WORKGROUP as u64;
+    by_pixels.min(by_dispatch).min(height as u64) as u32
+}
+
+impl Kernel {
+    /// Compiles the shader module on `device` (pipelines are made on first use).
+    pub fn new(device: &wgpu::Device) -> Result<Kernel, GpuError> {
+        scoped(device, "shader compilation", || {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("trace.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
+            });
+            let mut render = scene_entries();
+            render.push(storage_entry(5, false));
+            let mut query = scene_entries();
+            query.push(storage_entry(6, true));
+            query.push(storage_entry(7, false));
+            let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(label),
+                    entries,
+                })
+            };
+            let render_layout = layout("render", &render);
+            let query_layout = layout("query", &query);
+            let pl = |bgl: &wgpu::BindGroupLayout| {
+                device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: None,
+                    bind_group_layouts: &[Some(bgl)],
+                    immediate_size: 0,
+                })
+            };
+            Kernel {
+                render_pipeline_layout: pl(&render_layout),
+                query_pipeline_layout: pl(&query_layout),
+                module,
+                render_layout,
+                query_layout,
+                pipelines: Mutex::new(HashMap::new()),
+            }
+        })
+    }
+
+    /// The pipeline for `spec` and `entry`, compiled now (the time returned) or cached.
+    fn pipeline(
+        &self,
+        device: &wgpu::Device,
+        spec: Specialisation,
+        entry: Entry,
+    ) -> Result<(wgpu::ComputePipeline, Duration), GpuError> {
+        if let Some(p) = self
+            .pipelines
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(&(spec, entry))
+        {
+            return Ok((p.clone(), Duration::ZERO));
+        }
+        let t0 = Instant::now();
+        let constants = spec.constants();
+        let p = scoped(device, "pipeline creation", || {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("trace"),
+                layout: Some(match entry {
+                    Entry::Render => &self.render_pipeline_layout,
+                    Entry::Query => &self.query_pipeline_layout,
+                }),
+                module: &self.module,
+                entry_point: Some(match entry {
+                    Entry::Render => "render",
+                    Entry::Query => "query",
+                }),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    zero_initialize_workgroup_memory: false,
+                },
+                cache: None,
+            })
+        })?;
+        let dt = t0.elapsed();
+        self.pipelines
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .insert((spec, entry), p.clone());
+        Ok((p, dt))
+    }
+
+    /// Compiles (or finds cached) the pipeline for `spec` and returns the compile time.
+    pub fn prepare(
+        &self,
+        device: &wgpu::Device,
+        spec: Specialisation,
+    ) -> Result<Duration, GpuError> {
+        Ok(self.pipeline(device, spec, Entry::Render)?.1)
+    }
+
+    /// Forgets every compiled pipeline (so that the next render measures a compile).
+    pub fn clear_cache(&self) {
+        self.pipelines
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clear();
+    }
+
+    fn scene_buffers(
+        &self,
+        device: &wgpu::Device,
+        buf: &SceneBuffers,
+    ) -> Result<[wgpu::Buffer; 5], GpuError> {
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("params"),
+            contents: bytemuck::bytes_of(&buf.params),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let none = wgpu::BufferUsages::empty();
+        Ok([
+            params,
+            storage_buffer(device, "spheres", &buf.spheres, none)?,
+            storage_buffer(device, "triangles", &buf.triangles, none)?,
+            storage_buffer(device, "materials", &buf.materials, none)?,
+            storage_buffer(device, "lights", &buf.lights, none)?,
+        ])
+    }
+
+    /// Renders `buf` with the pipeline specialised as `spec`, in tiles of whole rows, and
+    /// calls `progress(rows_done, rows_total)` after each tile.
+    pub fn render(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &SceneBuffers,
+        spec: Specialisation,
+        progress: &mut dyn FnMut(u32, u32),
+    ) -> Result<(Image, GpuTimings), GpuError> {
+        let (width, height) = (buf.params.width, buf.params.height);
+        let mut timings = GpuTimings::default();
+        let (pipeline, compile) = self.pipeline(device, spec, Entry::Render)?;
+        timings.compile = compile;
+
+        let t0 = Instant::now();
+        let rows = tile_rows(device, width, height);
+        let tile_bytes = rows as u64 * width as u64 * 16;
+        check_size(device, "one tile of the image", tile_bytes)?;
+        let (scene, output, staging) = scoped(device, "upload", || -> Result<_, GpuError> {
+            let scene = self.scene_buffers(device, buf)?;
+            let output = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("image"),
+                size: tile_bytes,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let staging = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: tile_bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            Ok((scene, output, staging))
+        })??;
+        let mut entries: Vec<wgpu::BindGroupEntry> = scene
+            .iter()
+            .enumerate()
+            .map(|(k, b)| wgpu::BindGroupEntry {
+                binding: k as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        entries.push(wgpu::BindGroupEntry {
+            binding: 5,
+            resource: output.as_entire_binding(),
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("render"),
+            layout: &self.render_layout,
+            entries: &entries,
+        });
+        timings.upload = t0.elapsed();
+
+        let mut image = Image::new(width, height, [0.0; 4]);
+        let mut y = 0;
+        while y < height {
+            let h = rows.min(height - y);
+            let params = Params {
+                tile_x: 0,
+                tile_y: y,
+                tile_width: width,
+                tile_height: h,
+                ..buf.params
+            };
+            let t1 = Instant::now();
+            queue.write_buffer(&scene[0], 0, bytemuck::bytes_of(&params));
+            let mut enc = device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.dispatch_workgroups(
+                    width.div_ceil(RENDER_WORKGROUP),
+                    h.div_ceil(RENDER_WORKGROUP),
+                    1,
+                );
+            }
+            let bytes = h as u64 * width as u64 * 16;
+            enc.copy_buffer_to_buffer(&output, 0, &staging, 0, bytes);
+            scoped(device, "trace", || queue.submit([enc.finish()]))?;
+            wait(device, "trace")?;
+            timings.trace += t1.elapsed();
+
+            let t2 = Instant::now();
+            let data: Vec<[f32; 4]> = read_back(device, &staging, bytes)?;
+            let start = y as usize * width as usize;
+            image.pixels[start..start + data.len()].copy_from_slice(&data);
+            timings.readback += t2.elapsed();
+            y += h;
+            progress(y, height);
+        }
+        Ok((image, timings))
+    }
+
+    /// Runs the `query` entry point: the nearest hit of each ray, as `closest_hit` gives it.
+    pub fn query(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &SceneBuffers,
+        spec: Specialisation,
+        rays: &[RayIn],
+    ) -> Result<Vec<HitOut>, GpuError> {
+        if rays.is_empty() {
+            return Ok(Vec::new());
+        }
+        let (pipeline, _) = self.pipeline(device, spec, Entry::Query)?;
+        let max_rays = device.limits().max_compute_workgroups_per_dimension as usize
+            * QUERY_WORKGROUP as usize;
+        let mut out = Vec::with_capacity(rays.len());
+        let scene = self.scene_buffers(device, buf)?;
+        for chunk in rays.chunks(max_rays.min(1 << 20)) {
+            let bytes = (chunk.len() * size_of::<HitOut>()) as u64;
+            let ray_buf = storage_buffer(device, "rays", chunk, wgpu::BufferUsages::empty())?;
+            let hits = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("hits"),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let staging = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("hits readback"),
+                size: bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut entries: Vec<wgpu::BindGroupEntry> = scene
+                .iter()
+                .enumerate()
+                .map(|(k, b)| wgpu::BindGroupEntry {
+                    binding: k as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            entries.push(wgpu::BindGroupEntry {
+                binding: 6,
+                resource: ray_buf.as_entire_binding(),
+            });
+            entries.push(wgpu::BindGroupEntry {
+                binding: 7,
+                resource: hits.as_entire_binding(),
+            });
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("query"),
+                layout: &self.query_layout,
+                entries: &entries,
+            });
+            let mut enc = device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.dispatch_workgroups((chunk.len() as u32).div_ceil(QUERY_WORKGROUP), 1, 1);
+            }
+            enc.copy_buffer_to_buffer(&hits, 0, &staging, 0, bytes);
+            scoped(device, "query", || queue.submit([enc.finish()]))?;
+            wait(device, "query")?;
+            out.extend(read_back::<HitOut>(device, &staging, bytes)?);
+        }
+        Ok(out)
+    }
+}
+
+/// Maps the first `bytes` of `staging` and copies them out as `T`s.
+fn read_back<T: Pod>(
+    device: &wgpu::Device,
+    staging: &wgpu::Buffer,
+    bytes: u64,
+) -> Result<Vec<T>, GpuError> {
+    let slice = staging.slice(..bytes);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    wait(device, "readback")?;
+    match rx.recv() {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => {
+            return Err(GpuError::Runtime {
+                during: "readback",
+                message: e.to_string(),
+            });
+        }
+        Err(_) => {
+            return Err(GpuError::Runtime {
+                during: "readback",
+                message: "map callback dropped".into(),
+            });
+        }
+    }
+    let data = {
+        let view = slice.get_mapped_range().map_err(|e| GpuError::Runtime {
+            during: "readback",
+            message: e.to_string(),
+        })?;
+        bytemuck::cast_slice::<u8, T>(&view).to_vec()
+    };
+    staging.unmap();
+    Ok(data)
+}

@@ -1,0 +1,171 @@
+//! The GPU tracer: adapter choice and device creation ([`Gpu::new`]) kept apart from the
+//! work ([`Kernel::render`], [`Kernel::query`]), which takes any `wgpu::Device` so that tests
+//! inject one.
+
+mod kernel;
+
+use std::time::{Duration, Instant};
+
+pub use kernel::{GpuTimings, Kernel};
+
+/// The WGSL source of the kernel.
+pub const SHADER_SOURCE: &str = include_str!("../../shaders/trace.wgsl");
+
+/// Why the GPU tracer could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No Vulkan adapter at all.
+    #[error(
+        "no Vulkan adapter found: install a Vulkan driver (on Debian or Ubuntu: \
+         `apt-get install mesa-vulkan-drivers libvulkan1` gives lavapipe, a CPU Vulkan), \
+         or use --backend cpu"
+    )]
+    NoAdapter,
+    /// `--adapter NAME` matched none.
+    #[error("no Vulkan adapter matches {wanted:?}; found: {found}")]
+    AdapterNotFound {
+        /// What was asked for.
+        wanted: String,
+        /// What there is.
+        found: String,
+    },
+    /// The device could not be created.
+    #[error("cannot create a device on {adapter}: {message}")]
+    Device {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's message.
+        message: String,
+    },
+    /// The scene needs a buffer larger than the device allows.
+    #[error(
+        "{what} needs {needed} bytes but this device allows at most {limit} bytes in one \
+         storage buffer (max_storage_buffer_binding_size / max_buffer_size)"
+    )]
+    TooLarge {
+        /// Which buffer.
+        what: &'static str,
+        /// Bytes needed.
+        needed: u64,
+        /// Bytes allowed.
+        limit: u64,
+    },
+    /// Out of memory, a validation error, or a lost device during the work.
+    #[error("GPU error during {during}: {message}")]
+    Runtime {
+        /// What was being done.
+        during: &'static str,
+        /// wgpu's message.
+        message: String,
+    },
+    /// The GPU did not finish in time.
+    #[error("the GPU did not finish {during} within {seconds} s")]
+    Timeout {
+        /// What was being done.
+        during: &'static str,
+        /// The limit.
+        seconds: u64,
+    },
+}
+
+/// A device, its queue and the compiled kernel: one per process is enough.
+pub struct Gpu {
+    /// What the adapter says of itself.
+    pub info: wgpu::AdapterInfo,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The shader module and pipelines.
+    pub kernel: Kernel,
+    /// Time to find the adapter and create the device.
+    pub start_time: Duration,
+}
+
+/// The Vulkan adapters on this machine, best first: discrete GPU, integrated, virtual,
+/// then CPU implementations such as lavapipe.
+pub fn adapters() -> Vec<wgpu::Adapter> {
+    quiet_driver();
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+        backends: wgpu::Backends::VULKAN,
+        ..wgpu::InstanceDescriptor::new_without_display_handle()
+    });
+    let mut list = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+    list.sort_by_key(|a| match a.get_info().device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    });
+    list
+}
+
+/// Asks Mesa not to print its conformance warning for lavapipe on every start.
+fn quiet_driver() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        if std::env::var_os("MESA_VK_IGNORE_CONFORMANCE_WARNING").is_none() {
+            // SAFETY: called once, before any Vulkan loader thread reads the environment.
+            unsafe { std::env::set_var("MESA_VK_IGNORE_CONFORMANCE_WARNING", "1") };
+        }
+    });
+}
+
+/// Whether an adapter is a CPU implementation (lavapipe, SwiftShader).
+pub fn is_cpu_adapter(info: &wgpu::AdapterInfo) -> bool {
+    info.device_type == wgpu::DeviceType::Cpu
+}
+
+impl Gpu {
+    /// Opens the best adapter, or the first whose name contains `name` (case-insensitive).
+    pub fn new(name: Option<&str>) -> Result<Gpu, GpuError> {
+        let t0 = Instant::now();
+        let list = adapters();
+        if list.is_empty() {
+            return Err(GpuError::NoAdapter);
+        }
+        let adapter = match name {
+            None => list.into_iter().next().ok_or(GpuError::NoAdapter)?,
+            Some(want) => {
+                let found: Vec<String> = list.iter().map(|a| a.get_info().name).collect();
+                let low = want.to_lowercase();
+                list.into_iter()
+                    .find(|a| a.get_info().name.to_lowercase().contains(&low))
+                    .ok_or_else(|| GpuError::AdapterNotFound {
+                        wanted: want.to_string(),
+                        found: found.join(", "),
+                    })?
+            }
+        };
+        let info = adapter.get_info();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("glint"),
+            required_features: wgpu::Features::empty(),
+            // Everything the adapter offers: large scenes need its largest storage buffers.
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+        let start_time = t0.elapsed();
+        let kernel = Kernel::new(&device)?;
+        Ok(Gpu {
+            info,
+            device,
+            queue,
+            kernel,
+            start_time,
+        })
+    }
+
+    /// A one-line description: name, type, driver.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {} {})",
+            self.info.name, self.info.device_type, self.info.driver, self.info.driver_info
+        )
+    }
+}

@@ -1,0 +1,233 @@
+//! The `glint` command line: `render`, `compare`, `bench`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand, ValueEnum};
+use glint::buffers::{SceneBuffers, Specialisation};
+use glint::gpu::Gpu;
+use glint::scene::{Scene, TriangleAlgorithm};
+
+#[derive(Parser)]
+#[command(
+    name = "glint",
+    version,
+    about = "A WGSL compute-shader ray tracer with a bit-exact CPU mirror"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Backend {
+    /// The GPU tracer when a Vulkan adapter exists, else the CPU tracer (said in one line).
+    Auto,
+    /// The WGSL compute shader through wgpu (Vulkan).
+    Gpu,
+    /// The f32 CPU mirror of the shader.
+    Cpu,
+    /// The f64 CPU ground truth.
+    CpuF64,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to a PNG.
+    Render {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Output PNG.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Which tracer.
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: Backend,
+        /// Image size WxH (default: the scene's camera).
+        #[arg(long, value_parser = parse_size)]
+        size: Option<(u32, u32)>,
+        /// Triangle algorithm (default: the scene's).
+        #[arg(long)]
+        triangle: Option<TriangleAlgorithm>,
+        /// Use the first Vulkan adapter whose name contains this.
+        #[arg(long)]
+        adapter: Option<String>,
+    },
+    /// Render a scene on the GPU and on the CPU mirror and measure the difference.
+    Compare {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Image size WxH (default: the scene's camera).
+        #[arg(long, value_parser = parse_size)]
+        size: Option<(u32, u32)>,
+        /// Triangle algorithm (default: the scene's).
+        #[arg(long)]
+        triangle: Option<TriangleAlgorithm>,
+        /// Use the first Vulkan adapter whose name contains this.
+        #[arg(long)]
+        adapter: Option<String>,
+        /// Where to write the difference image.
+        #[arg(long, default_value = "diff.png")]
+        diff: PathBuf,
+    },
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("{s:?}: expected WxH, e.g. 640x480"))?;
+    let p = |v: &str| -> Result<u32, String> {
+        let n: u32 = v
+            .trim()
+            .parse()
+            .map_err(|_| format!("{s:?}: {v:?} is not a whole number"))?;
+        if n == 0 || n as i64 > glint::scene::MAX_IMAGE_SIDE {
+            return Err(format!(
+                "{s:?}: each side must be in 1..={}",
+                glint::scene::MAX_IMAGE_SIDE
+            ));
+        }
+        Ok(n)
+    };
+    Ok((p(w)?, p(h)?))
+}
+
+fn load(scene: &Path) -> Result<Scene> {
+    let s = Scene::load(scene)?;
+    for w in &s.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(s)
+}
+
+fn main() {
+    if let Err(e) = run(Cli::parse()) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Render {
+            scene,
+            output,
+            backend,
+            size,
+            triangle,
+            adapter,
+        } => {
+            glint::image::check_extension(&output)?;
+            if same_file(&scene, &output) {
+                bail!(
+                    "{}: the output would overwrite the scene file",
+                    output.display()
+                );
+            }
+            let s = load(&scene)?;
+            let (w, h) = size.unwrap_or(s.size());
+            let algo = triangle.unwrap_or(s.triangle);
+            let buf = SceneBuffers::new(&s, w, h, algo);
+            let spec = Specialisation::for_scene(&buf);
+            let t0 = Instant::now();
+            let (image, what) = match backend {
+                Backend::Cpu => (glint::cpu::render_f32(&buf, spec), "cpu (f32)".to_string()),
+                Backend::CpuF64 => (
+                    glint::cpu::render_f64(&s, &buf, spec),
+                    "cpu-f64".to_string(),
+                ),
+                Backend::Gpu | Backend::Auto => match Gpu::new(adapter.as_deref()) {
+                    Ok(gpu) => {
+                        let (img, t) = gpu.kernel.render(
+                            &gpu.device,
+                            &gpu.queue,
+                            &buf,
+                            spec,
+                            &mut |_, _| {},
+                        )?;
+                        let what = format!(
+                            "gpu: {} (device {:.0} ms, compile {:.0} ms, trace {:.1} ms, readback {:.1} ms)",
+                            gpu.describe(),
+                            gpu.start_time.as_secs_f64() * 1e3,
+                            t.compile.as_secs_f64() * 1e3,
+                            t.trace.as_secs_f64() * 1e3,
+                            t.readback.as_secs_f64() * 1e3
+                        );
+                        (img, what)
+                    }
+                    Err(e)
+                        if backend == Backend::Auto
+                            && matches!(e, glint::gpu::GpuError::NoAdapter) =>
+                    {
+                        eprintln!(
+                            "note: no Vulkan adapter, so the CPU tracer renders this \
+                             (for the GPU tracer: apt-get install mesa-vulkan-drivers libvulkan1)"
+                        );
+                        (glint::cpu::render_f32(&buf, spec), "cpu (f32)".to_string())
+                    }
+                    Err(e) => return Err(e.into()),
+                },
+            };
+            let dt = t0.elapsed();
+            image.save_png(&output)?;
+            println!(
+                "{}: {}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",
+                output.display(),
+                w,
+                h,
+                buf.triangles.len(),
+                algo,
+                buf.spheres.len(),
+                dt.as_secs_f64() * 1e3,
+                what
+            );
+            Ok(())
+        }
+        Command::Compare {
+            scene,
+            size,
+            triangle,
+            adapter,
+            diff,
+        } => {
+            glint::image::check_extension(&diff)?;
+            let s = load(&scene)?;
+            let (w, h) = size.unwrap_or(s.size());
+            let algo = triangle.unwrap_or(s.triangle);
+            let buf = SceneBuffers::new(&s, w, h, algo);
+            let spec = Specialisation::for_scene(&buf);
+            let gpu = Gpu::new(adapter.as_deref())?;
+            let (g, _) = gpu
+                .kernel
+                .render(&gpu.device, &gpu.queue, &buf, spec, &mut |_, _| {})?;
+            let c = glint::cpu::render_f32(&buf, spec);
+            let r = glint::cpu::render_f64(&s, &buf, spec);
+            let d = glint::compare::diff(&g, &c);
+            let e = glint::compare::diff(&c, &r);
+            println!("adapter: {}", gpu.describe());
+            println!("scene: {} at {w}x{h}, triangles: {algo}", scene.display());
+            println!(
+                "gpu vs cpu: {} differing pixels (8-bit), {} differing in some f32 bit, {} hit/miss disagreements, \
+                 largest channel difference {:.3e} ({} in 8 bits), mean {:.3e}",
+                d.differing_pixels, d.differing_bits, d.hit_miss, d.max_abs, d.max_u8, d.mean_abs
+            );
+            println!(
+                "cpu f32 vs f64: {} differing pixels (8-bit), {} hit/miss, largest {:.3e}, rms {:.3e}",
+                e.differing_pixels, e.hit_miss, e.max_abs, e.rms
+            );
+            glint::compare::diff_image(&g, &c)
+                .save_png(&diff)
+                .with_context(|| "writing the difference image")?;
+            println!("difference image: {}", diff.display());
+            Ok(())
+        }
+    }
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
+}

@@ -1,0 +1,86 @@
+//! Scene errors: every one names the file, the line and the key.
+
+use std::path::PathBuf;
+
+/// Why a scene could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The scene file (or a mesh it names) could not be read.
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        /// The file.
+        file: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The TOML is malformed, or a key is unknown, missing or of the wrong type.
+    #[error("{file}:{line}: {key}: {message}")]
+    Syntax {
+        /// The file.
+        file: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// The key at fault, as well as it can be told.
+        key: String,
+        /// What the parser said.
+        message: String,
+    },
+    /// A value is out of its domain (NaN, a negative radius, an unknown material, ...).
+    #[error("{file}:{line}: {key}: {message}")]
+    Invalid {
+        /// The file.
+        file: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// The key at fault, with its table (`spheres[2].radius`).
+        key: String,
+        /// What is wrong and what is allowed.
+        message: String,
+    },
+    /// A mesh file is bad.
+    #[error("{file}:{line}: {key}: mesh {mesh}: {message}")]
+    Mesh {
+        /// The scene file.
+        file: PathBuf,
+        /// The line of the `[[meshes]]` entry's `file` key.
+        line: usize,
+        /// `meshes[i].file`.
+        key: String,
+        /// The OBJ file.
+        mesh: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
+}
+
+impl SceneError {
+    /// The 1-based line the error points at, when it has one.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            SceneError::Io { .. } => None,
+            SceneError::Syntax { line, .. }
+            | SceneError::Invalid { line, .. }
+            | SceneError::Mesh { line, .. } => Some(*line),
+        }
+    }
+
+    /// The key the error names, when it has one.
+    pub fn key(&self) -> Option<&str> {
+        match self {
+            SceneError::Io { .. } => None,
+            SceneError::Syntax { key, .. }
+            | SceneError::Invalid { key, .. }
+            | SceneError::Mesh { key, .. } => Some(key),
+        }
+    }
+}
+
+/// The 1-based line of byte offset `pos` in `src`.
+pub fn line_of(src: &str, pos: usize) -> usize {
+    let pos = pos.min(src.len());
+    src.as_bytes()[..pos]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}

@@ -1,0 +1,124 @@
+//! The TOML scene format as serde reads it (SPEC.md, "The scene format"). Unknown keys are
+//! errors; values that need checking keep their position (`Spanned`) so that an error can
+//! name the line.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+/// A 3-vector as written in the file.
+pub type Vec3File = Spanned<[f32; 3]>;
+
+/// The whole file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Ia.
+    pub ambient: Option<Vec3File>,
+    /// Colour of rays that hit nothing.
+    pub background: Option<Vec3File>,
+    /// `naive`, `moller-trumbore` or `watertight`.
+    pub triangle: Option<Spanned<String>>,
+    /// Hard shadows.
+    pub shadows: Option<bool>,
+    /// The camera.
+    pub camera: Spanned<CameraFile>,
+    /// Point lights.
+    #[serde(default)]
+    pub lights: Vec<Spanned<LightFile>>,
+    /// Named materials.
+    #[serde(default)]
+    pub materials: BTreeMap<String, Spanned<MaterialFile>>,
+    /// Spheres.
+    #[serde(default)]
+    pub spheres: Vec<Spanned<SphereFile>>,
+    /// Triangles.
+    #[serde(default)]
+    pub triangles: Vec<Spanned<TriangleFile>>,
+    /// OBJ meshes.
+    #[serde(default)]
+    pub meshes: Vec<Spanned<MeshFile>>,
+}
+
+/// `[camera]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraFile {
+    /// Position.
+    pub eye: Vec3File,
+    /// Point looked at.
+    pub look_at: Vec3File,
+    /// Up hint.
+    pub up: Option<Vec3File>,
+    /// Vertical field of view, degrees.
+    pub fov: Spanned<f32>,
+    /// Image width.
+    pub width: Spanned<i64>,
+    /// Image height.
+    pub height: Spanned<i64>,
+}
+
+/// `[[lights]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightFile {
+    /// Position.
+    pub position: Vec3File,
+    /// Ip.
+    pub color: Vec3File,
+}
+
+/// `[materials.NAME]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialFile {
+    /// `ambient`, `diffuse` or `phong`.
+    pub model: Spanned<String>,
+    /// Ambient reflectance.
+    pub ka: Vec3File,
+    /// Diffuse reflectance (needed by `diffuse` and `phong`).
+    pub kd: Option<Vec3File>,
+    /// Specular reflectance (needed by `phong`).
+    pub ks: Option<Vec3File>,
+    /// Phong exponent (needed by `phong`).
+    pub n: Option<Spanned<f32>>,
+}
+
+/// `[[spheres]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereFile {
+    /// Centre.
+    pub center: Vec3File,
+    /// Radius.
+    pub radius: Spanned<f32>,
+    /// Material name.
+    pub material: Spanned<String>,
+}
+
+/// `[[triangles]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleFile {
+    /// Three vertices.
+    pub vertices: Spanned<[[f32; 3]; 3]>,
+    /// Material name.
+    pub material: Spanned<String>,
+}
+
+/// `[[meshes]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshFile {
+    /// OBJ path, relative to the scene file.
+    pub file: Spanned<String>,
+    /// Material name; optional when the OBJ has an MTL.
+    pub material: Option<Spanned<String>>,
+    /// Per-axis scale.
+    pub scale: Option<Vec3File>,
+    /// Rotation in degrees about x, then y, then z.
+    pub rotate: Option<Vec3File>,
+    /// Translation.
+    pub translate: Option<Vec3File>,
+}

@@ -1,0 +1,246 @@
+//! `[[meshes]]`: Wavefront OBJ through `tobj`, polygons triangulated, the material from the
+//! scene or from the OBJ's MTL, then scale, rotate (x, then y, then z) and translate.
+
+use std::io::BufReader;
+use std::path::Path;
+
+use super::format::MeshFile;
+use super::{Material, Model, SceneError, Triangle, Validator, line_of};
+
+/// Whether a triangle has zero area in f64 (collinear or coincident vertices).
+pub fn is_degenerate(v: &[[f32; 3]; 3]) -> bool {
+    let d = |i: usize, k: usize| v[i][k] as f64 - v[0][k] as f64;
+    let (e1, e2) = ([d(1, 0), d(1, 1), d(1, 2)], [d(2, 0), d(2, 1), d(2, 2)]);
+    let c = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    c == [0.0; 3]
+}
+
+/// The affine map of a mesh entry, in f64.
+struct Transform {
+    scale: [f64; 3],
+    /// Row-major rotation Rz·Ry·Rx.
+    rot: [[f64; 3]; 3],
+    translate: [f64; 3],
+}
+
+impl Transform {
+    fn new(scale: [f32; 3], rotate_deg: [f32; 3], translate: [f32; 3]) -> Self {
+        let [ax, ay, az] = rotate_deg.map(|d| (d as f64).to_radians());
+        let (sx, cx) = ax.sin_cos();
+        let (sy, cy) = ay.sin_cos();
+        let (sz, cz) = az.sin_cos();
+        let rx = [[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]];
+        let ry = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
+        let rz = [[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]];
+        let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| {
+            let mut m = [[0.0; 3]; 3];
+            for (i, row) in m.iter_mut().enumerate() {
+                for (j, x) in row.iter_mut().enumerate() {
+                    *x = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+                }
+            }
+            m
+        };
+        Transform {
+            scale: scale.map(f64::from),
+            rot: mul(rz, mul(ry, rx)),
+            translate: translate.map(f64::from),
+        }
+    }
+
+    fn apply(&self, p: [f32; 3]) -> [f32; 3] {
+        let s = [0, 1, 2].map(|k| p[k] as f64 * self.scale[k]);
+        [0, 1, 2].map(|i| {
+            (self.rot[i][0] * s[0]
+                + self.rot[i][1] * s[1]
+                + self.rot[i][2] * s[2]
+                + self.translate[i]) as f32
+        })
+    }
+}
+
+/// Loads mesh entry `i` into `triangles` (and its MTL materials into `materials`).
+pub(super) fn load(
+    v: &Validator<'_>,
+    i: usize,
+    m: &MeshFile,
+    materials: &mut Vec<Material>,
+    triangles: &mut Vec<Triangle>,
+    warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let key = format!("meshes[{i}].file");
+    let line = line_of(v.src, m.file.span().start);
+    let base = v.path.parent().unwrap_or(Path::new("."));
+    let obj_path = base.join(m.file.get_ref());
+    let fail = |message: String| SceneError::Mesh {
+        file: v.path.to_owned(),
+        line,
+        key: key.clone(),
+        mesh: obj_path.clone(),
+        message,
+    };
+    let bytes = read_mesh_bytes(&obj_path).map_err(&fail)?;
+    if let Err(e) = std::str::from_utf8(&bytes) {
+        let text = String::from_utf8_lossy(&bytes);
+        return Err(fail(format!(
+            "not UTF-8 at line {}",
+            line_of(&text, e.valid_up_to())
+        )));
+    }
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let obj_dir = obj_path.parent().unwrap_or(Path::new(".")).to_owned();
+    let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(&bytes[..]), &opts, |p| {
+        tobj::load_mtl(obj_dir.join(p))
+    })
+    .map_err(|e| fail(format!("cannot parse OBJ: {e}")))?;
+
+    let named = match &m.material {
+        Some(name) => {
+            let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
+            Some(v.material_index(&names, name, &format!("meshes[{i}].material"))?)
+        }
+        None => None,
+    };
+    // The MTL's materials, appended once, in file order.
+    let mtl_base = materials.len() as u32;
+    let mtl = if named.is_none() {
+        mtl.unwrap_or_default()
+    } else {
+        Vec::new()
+    };
+    for (k, mm) in mtl.iter().enumerate() {
+        let ka = mm.ambient.unwrap_or([0.0; 3]);
+        let kd = mm.diffuse.unwrap_or([0.8; 3]);
+        let ks = mm.specular.unwrap_or([0.0; 3]);
+        let n = mm.shininess.unwrap_or(0.0);
+        if [ka, kd, ks]
+            .iter()
+            .flatten()
+            .chain([&n])
+            .any(|x| !x.is_finite() || *x < 0.0)
+        {
+            return Err(fail(format!(
+                "MTL material {:?} has a negative or non-finite value",
+                mm.name
+            )));
+        }
+        materials.push(Material {
+            name: format!("{}#{k}:{}", m.file.get_ref(), mm.name),
+            model: if ks == [0.0; 3] {
+                Model::Diffuse
+            } else {
+                Model::Phong
+            },
+            ka,
+            kd,
+            ks,
+            n,
+        });
+    }
+
+    let xf = Transform::new(
+        m.scale.as_ref().map(|s| *s.get_ref()).unwrap_or([1.0; 3]),
+        m.rotate.as_ref().map(|s| *s.get_ref()).unwrap_or([0.0; 3]),
+        m.translate
+            .as_ref()
+            .map(|s| *s.get_ref())
+            .unwrap_or([0.0; 3]),
+    );
+    for (name, s) in [
+        ("scale", &m.scale),
+        ("rotate", &m.rotate),
+        ("translate", &m.translate),
+    ] {
+        if let Some(s) = s {
+            v.finite3(s, &format!("meshes[{i}].{name}"))?;
+        }
+    }
+    let before = triangles.len();
+    let mut degenerate = 0usize;
+    for model in &models {
+        let mesh = &model.mesh;
+        let material = match (named, mesh.material_id) {
+            (Some(k), _) => k,
+            (None, Some(id)) if id < mtl.len() => mtl_base + id as u32,
+            _ => {
+                return Err(fail(format!(
+                    "object {:?} has no material: name one with `material =` or give the OBJ an MTL",
+                    model.name
+                )));
+            }
+        };
+        let n_vertices = mesh.positions.len() / 3;
+        for (f, tri) in mesh.indices.chunks_exact(3).enumerate() {
+            let mut vs = [[0.0f32; 3]; 3];
+            for (slot, &ix) in vs.iter_mut().zip(tri) {
+                let ix = ix as usize;
+                if ix >= n_vertices {
+                    return Err(fail(format!(
+                        "object {:?}, face {f}: vertex index {} is out of range (the object has {n_vertices} vertices)",
+                        model.name,
+                        ix + 1
+                    )));
+                }
+                let p = [
+                    mesh.positions[3 * ix],
+                    mesh.positions[3 * ix + 1],
+                    mesh.positions[3 * ix + 2],
+                ];
+                if p.iter().any(|x| !x.is_finite()) {
+                    return Err(fail(format!(
+                        "object {:?}: vertex {} is not finite",
+                        model.name,
+                        ix + 1
+                    )));
+                }
+                *slot = xf.apply(p);
+            }
+            if vs.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(fail(format!(
+                    "object {:?}, face {f}: the transform overflows f32",
+                    model.name
+                )));
+            }
+            if is_degenerate(&vs) {
+                degenerate += 1;
+            }
+            triangles.push(Triangle {
+                vertices: vs,
+                material,
+            });
+        }
+    }
+    if triangles.len() == before {
+        return Err(fail("no triangles: the mesh is empty".into()));
+    }
+    if degenerate > 0 {
+        warnings.push(format!(
+            "{}:{line}: {key}: {degenerate} zero-area triangles (never hit)",
+            v.path.display()
+        ));
+    }
+    Ok(())
+}
+
+/// The bytes of an OBJ file, gunzipped when the name ends in `.gz`.
+fn read_mesh_bytes(path: &Path) -> Result<Vec<u8>, String> {
+    let raw = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    if path.extension().is_some_and(|e| e == "gz") {
+        use std::io::Read;
+        let mut out = Vec::new();
+        flate2::read::GzDecoder::new(&raw[..])
+            .read_to_end(&mut out)
+            .map_err(|e| format!("cannot gunzip: {e}"))?;
+        return Ok(out);
+    }
+    Ok(raw)
+}

@@ -1,0 +1,530 @@
+//! Scenes: the TOML format, its validation (every error names file, line and key), and
+//! OBJ meshes.
+
+mod error;
+mod format;
+mod mesh;
+
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+pub use error::{SceneError, line_of};
+use format::{SceneFile, Vec3File};
+use toml::Spanned;
+
+/// The largest width or height accepted (the GPU renders larger frames in tiles).
+pub const MAX_IMAGE_SIDE: i64 = 32_768;
+
+/// Ray/triangle intersection algorithm.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TriangleAlgorithm {
+    /// The seed's plane + barycentric test.
+    Naive,
+    /// Möller–Trumbore.
+    MollerTrumbore,
+    /// Woop, Benthin and Wald's watertight test.
+    Watertight,
+}
+
+impl TriangleAlgorithm {
+    /// All three, in the order of their codes.
+    pub const ALL: [TriangleAlgorithm; 3] = [
+        TriangleAlgorithm::Naive,
+        TriangleAlgorithm::MollerTrumbore,
+        TriangleAlgorithm::Watertight,
+    ];
+
+    /// The `TRIANGLE_ALGO` code of `buffers`.
+    pub fn code(self) -> u32 {
+        match self {
+            TriangleAlgorithm::Naive => crate::buffers::TRIANGLE_NAIVE,
+            TriangleAlgorithm::MollerTrumbore => crate::buffers::TRIANGLE_MOLLER_TRUMBORE,
+            TriangleAlgorithm::Watertight => crate::buffers::TRIANGLE_WATERTIGHT,
+        }
+    }
+
+    /// The name used in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            TriangleAlgorithm::Naive => "naive",
+            TriangleAlgorithm::MollerTrumbore => "moller-trumbore",
+            TriangleAlgorithm::Watertight => "watertight",
+        }
+    }
+}
+
+impl FromStr for TriangleAlgorithm {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "naive" => Ok(TriangleAlgorithm::Naive),
+            "moller-trumbore" => Ok(TriangleAlgorithm::MollerTrumbore),
+            "watertight" => Ok(TriangleAlgorithm::Watertight),
+            _ => Err(format!(
+                "unknown triangle algorithm {s:?}: expected naive, moller-trumbore or watertight"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for TriangleAlgorithm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A material's shading model: which terms of the Phong sum it computes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Model {
+    /// Ia·ka only.
+    Ambient,
+    /// Ambient + diffuse.
+    Diffuse,
+    /// Ambient + diffuse + specular.
+    Phong,
+}
+
+/// The camera, as the file gives it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    /// Position.
+    pub eye: [f32; 3],
+    /// Point looked at (≠ eye).
+    pub look_at: [f32; 3],
+    /// Up hint (not parallel to the view).
+    pub up: [f32; 3],
+    /// Vertical field of view in degrees, in (0, 180).
+    pub fov: f32,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+/// A point light.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    /// Position.
+    pub position: [f32; 3],
+    /// Colour Ip.
+    pub color: [f32; 3],
+}
+
+/// A named material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Its name in the file (or in the MTL).
+    pub name: String,
+    /// Which terms it computes.
+    pub model: Model,
+    /// Ambient reflectance.
+    pub ka: [f32; 3],
+    /// Diffuse reflectance.
+    pub kd: [f32; 3],
+    /// Specular reflectance.
+    pub ks: [f32; 3],
+    /// Phong exponent, ≥ 0.
+    pub n: f32,
+}
+
+/// A sphere.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre.
+    pub center: [f32; 3],
+    /// Radius, > 0.
+    pub radius: f32,
+    /// Index into `Scene::materials`.
+    pub material: u32,
+}
+
+/// A triangle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Triangle {
+    /// a, b, c.
+    pub vertices: [[f32; 3]; 3],
+    /// Index into `Scene::materials`.
+    pub material: u32,
+}
+
+/// A loaded, validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Where it came from.
+    pub path: PathBuf,
+    /// Ia.
+    pub ambient: [f32; 3],
+    /// Colour of rays that hit nothing.
+    pub background: [f32; 3],
+    /// The scene's triangle algorithm.
+    pub triangle: TriangleAlgorithm,
+    /// Hard shadows on.
+    pub shadows: bool,
+    /// The camera.
+    pub camera: Camera,
+    /// Point lights.
+    pub lights: Vec<Light>,
+    /// Materials: the file's, sorted by name, then those of MTL files.
+    pub materials: Vec<Material>,
+    /// Spheres.
+    pub spheres: Vec<Sphere>,
+    /// Triangles: the file's, then each mesh's.
+    pub triangles: Vec<Triangle>,
+    /// Things that are allowed but probably not meant (zero-area triangles, ...), each
+    /// naming file, line and key.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// Reads and validates the scene file at `path` (meshes relative to it).
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+            file: path.to_owned(),
+            source,
+        })?;
+        let src = String::from_utf8(bytes).map_err(|e| {
+            let pos = e.utf8_error().valid_up_to();
+            let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
+            SceneError::Syntax {
+                file: path.to_owned(),
+                line: line_of(&text, pos),
+                key: "(file)".into(),
+                message: format!("not UTF-8 at byte {pos}"),
+            }
+        })?;
+        Scene::parse(&src, path)
+    }
+
+    /// Parses and validates scene text; `path` names it in errors and anchors mesh paths.
+    pub fn parse(src: &str, path: &Path) -> Result<Scene, SceneError> {
+        let file: SceneFile = toml::from_str(src).map_err(|e| syntax_error(src, path, &e))?;
+        Validator { src, path }.scene(file)
+    }
+
+    /// The sizes the scene's camera asks for.
+    pub fn size(&self) -> (u32, u32) {
+        (self.camera.width, self.camera.height)
+    }
+}
+
+fn syntax_error(src: &str, path: &Path, e: &toml::de::Error) -> SceneError {
+    let span = e.span().unwrap_or(0..0);
+    let message = e.message().trim().to_string();
+    // serde names the field in backticks ("unknown field `foo`", "missing field `bar`");
+    // otherwise the key is the text under the span, when that is short.
+    let key = message
+        .split('`')
+        .nth(1)
+        .map(str::to_string)
+        .or_else(|| {
+            let s = src.get(span.clone())?.trim();
+            (!s.is_empty() && s.len() <= 40 && !s.contains('\n')).then(|| s.to_string())
+        })
+        .unwrap_or_else(|| "(document)".into());
+    SceneError::Syntax {
+        file: path.to_owned(),
+        line: line_of(src, span.start),
+        key,
+        message,
+    }
+}
+
+/// Checks values and turns the file's structs into the scene's.
+struct Validator<'a> {
+    src: &'a str,
+    path: &'a Path,
+}
+
+impl Validator<'_> {
+    fn err<T>(
+        &self,
+        span: std::ops::Range<usize>,
+        key: &str,
+        message: String,
+    ) -> Result<T, SceneError> {
+        Err(SceneError::Invalid {
+            file: self.path.to_owned(),
+            line: line_of(self.src, span.start),
+            key: key.to_string(),
+            message,
+        })
+    }
+
+    fn finite3(&self, v: &Vec3File, key: &str) -> Result<[f32; 3], SceneError> {
+        let a = *v.get_ref();
+        if a.iter().any(|x| !x.is_finite()) {
+            return self.err(v.span(), key, format!("{a:?} is not finite"));
+        }
+        Ok(a)
+    }
+
+    fn colour(&self, v: &Vec3File, key: &str) -> Result<[f32; 3], SceneError> {
+        let a = self.finite3(v, key)?;
+        if a.iter().any(|&x| x < 0.0) {
+            return self.err(v.span(), key, format!("{a:?} has a negative component"));
+        }
+        Ok(a)
+    }
+
+    fn material_index(
+        &self,
+        names: &[String],
+        name: &Spanned<String>,
+        key: &str,
+    ) -> Result<u32, SceneError> {
+        match names.iter().position(|n| n == name.get_ref()) {
+            Some(i) => Ok(i as u32),
+            None => self.err(
+                name.span(),
+                key,
+                format!(
+                    "no material named {:?} (defined: {})",
+                    name.get_ref(),
+                    if names.is_empty() {
+                        "none".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            ),
+        }
+    }
+
+    fn scene(&self, f: SceneFile) -> Result<Scene, SceneError> {
+        let mut warnings = Vec::new();
+        let ambient = match &f.ambient {
+            Some(v) => self.colour(v, "ambient")?,
+            None => [0.0; 3],
+        };
+        let background = match &f.background {
+            Some(v) => self.colour(v, "background")?,
+            None => [0.0; 3],
+        };
+        let triangle = match &f.triangle {
+            Some(s) => match s.get_ref().parse() {
+                Ok(a) => a,
+                Err(m) => return self.err(s.span(), "triangle", m),
+            },
+            None => TriangleAlgorithm::MollerTrumbore,
+        };
+        let camera = self.camera(&f.camera)?;
+
+        let mut lights = Vec::new();
+        for (i, l) in f.lights.iter().enumerate() {
+            let l = l.get_ref();
+            lights.push(Light {
+                position: self.finite3(&l.position, &format!("lights[{i}].position"))?,
+                color: self.colour(&l.color, &format!("lights[{i}].color"))?,
+            });
+        }
+
+        let mut materials = Vec::new();
+        for (name, m) in &f.materials {
+            materials.push(self.material(name, m)?);
+        }
+        if lights.is_empty() && materials.iter().any(|m| m.model != Model::Ambient) {
+            warnings.push(format!(
+                "{}: lights: none, so only the ambient term shows",
+                self.path.display()
+            ));
+        }
+        let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
+
+        let mut spheres = Vec::new();
+        for (i, s) in f.spheres.iter().enumerate() {
+            let s = s.get_ref();
+            let center = self.finite3(&s.center, &format!("spheres[{i}].center"))?;
+            let radius = *s.radius.get_ref();
+            if !(radius.is_finite() && radius > 0.0) {
+                return self.err(
+                    s.radius.span(),
+                    &format!("spheres[{i}].radius"),
+                    format!("{radius} must be finite and > 0"),
+                );
+            }
+            let material =
+                self.material_index(&names, &s.material, &format!("spheres[{i}].material"))?;
+            spheres.push(Sphere {
+                center,
+                radius,
+                material,
+            });
+        }
+
+        let mut triangles = Vec::new();
+        for (i, t) in f.triangles.iter().enumerate() {
+            let t = t.get_ref();
+            let key = format!("triangles[{i}].vertices");
+            let v = *t.vertices.get_ref();
+            if v.iter().flatten().any(|x| !x.is_finite()) {
+                return self.err(t.vertices.span(), &key, format!("{v:?} is not finite"));
+            }
+            if mesh::is_degenerate(&v) {
+                warnings.push(format!(
+                    "{}:{}: {key}: zero area: never hit",
+                    self.path.display(),
+                    line_of(self.src, t.vertices.span().start)
+                ));
+            }
+            let material =
+                self.material_index(&names, &t.material, &format!("triangles[{i}].material"))?;
+            triangles.push(Triangle {
+                vertices: v,
+                material,
+            });
+        }
+
+        for (i, m) in f.meshes.iter().enumerate() {
+            mesh::load(
+                self,
+                i,
+                m.get_ref(),
+                &mut materials,
+                &mut triangles,
+                &mut warnings,
+            )?;
+        }
+
+        Ok(Scene {
+            path: self.path.to_owned(),
+            ambient,
+            background,
+            triangle,
+            shadows: f.shadows.unwrap_or(false),
+            camera,
+            lights,
+            materials,
+            spheres,
+            triangles,
+            warnings,
+        })
+    }
+
+    fn camera(&self, c: &Spanned<format::CameraFile>) -> Result<Camera, SceneError> {
+        let span = c.span();
+        let c = c.get_ref();
+        let eye = self.finite3(&c.eye, "camera.eye")?;
+        let look_at = self.finite3(&c.look_at, "camera.look_at")?;
+        let up = match &c.up {
+            Some(v) => self.finite3(v, "camera.up")?,
+            None => [0.0, 1.0, 0.0],
+        };
+        let fov = *c.fov.get_ref();
+        if !(fov > 0.0 && fov < 180.0) {
+            return self.err(
+                c.fov.span(),
+                "camera.fov",
+                format!("{fov} must be in (0, 180) degrees"),
+            );
+        }
+        let side = |v: &Spanned<i64>, key: &str| -> Result<u32, SceneError> {
+            let x = *v.get_ref();
+            if !(1..=MAX_IMAGE_SIDE).contains(&x) {
+                return self.err(
+                    v.span(),
+                    key,
+                    format!("{x} must be in 1..={MAX_IMAGE_SIDE}"),
+                );
+            }
+            Ok(x as u32)
+        };
+        let width = side(&c.width, "camera.width")?;
+        let height = side(&c.height, "camera.height")?;
+        // The basis in f64: the view must have a length and up must not be parallel to it.
+        let d = [
+            look_at[0] as f64 - eye[0] as f64,
+            look_at[1] as f64 - eye[1] as f64,
+            look_at[2] as f64 - eye[2] as f64,
+        ];
+        let dl = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if dl == 0.0 {
+            return self.err(
+                c.look_at.span(),
+                "camera.look_at",
+                "equals camera.eye: no view direction".into(),
+            );
+        }
+        let u = up.map(|x| x as f64);
+        let ul = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+        let cr = [
+            d[1] * u[2] - d[2] * u[1],
+            d[2] * u[0] - d[0] * u[2],
+            d[0] * u[1] - d[1] * u[0],
+        ];
+        let cl = (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt();
+        if ul == 0.0 || cl <= 1e-6 * dl * ul {
+            let up_span = c.up.as_ref().map(|u| u.span()).unwrap_or(span);
+            return self.err(
+                up_span,
+                "camera.up",
+                format!("{up:?} is zero or parallel to the view direction"),
+            );
+        }
+        Ok(Camera {
+            eye,
+            look_at,
+            up,
+            fov,
+            width,
+            height,
+        })
+    }
+
+    fn material(
+        &self,
+        name: &str,
+        m: &Spanned<format::MaterialFile>,
+    ) -> Result<Material, SceneError> {
+        let span = m.span();
+        let m = m.get_ref();
+        let key = |k: &str| format!("materials.{name}.{k}");
+        let model = match m.model.get_ref().as_str() {
+            "ambient" => Model::Ambient,
+            "diffuse" => Model::Diffuse,
+            "phong" => Model::Phong,
+            other => {
+                return self.err(
+                    m.model.span(),
+                    &key("model"),
+                    format!("unknown model {other:?}: expected ambient, diffuse or phong"),
+                );
+            }
+        };
+        let ka = self.colour(&m.ka, &key("ka"))?;
+        let need = |v: &Option<Vec3File>, k: &str, needed: bool| -> Result<[f32; 3], SceneError> {
+            match v {
+                Some(v) => self.colour(v, &key(k)),
+                None if needed => self.err(
+                    span.clone(),
+                    &key(k),
+                    format!("missing: the {} model needs it", m.model.get_ref()),
+                ),
+                None => Ok([0.0; 3]),
+            }
+        };
+        let kd = need(&m.kd, "kd", model != Model::Ambient)?;
+        let ks = need(&m.ks, "ks", model == Model::Phong)?;
+        let n = match &m.n {
+            Some(n) => {
+                let x = *n.get_ref();
+                if !(x.is_finite() && x >= 0.0) {
+                    return self.err(n.span(), &key("n"), format!("{x} must be finite and ≥ 0"));
+                }
+                x
+            }
+            None if model == Model::Phong => {
+                return self.err(span, &key("n"), "missing: the phong model needs it".into());
+            }
+            None => 1.0,
+        };
+        Ok(Material {
+            name: name.to_string(),
+            model,
+            ka,
+            kd,
+            ks,
+            n,
+        })
+    }
+}
