@@ -4,7 +4,7 @@
 //!
 //! Why not glam: glam's `Vec3` is fine arithmetic, but the order of its operations is its
 //! own business and may change; here `dot` is `x·x' + y·y' + z·z'` left to right and
-//! `normalize` is `v * (1 / sqrt(dot(v, v)))`, which is what lavapipe does for WGSL's
+//! `normalize` is `v / sqrt(dot(v, v))`, which is what lavapipe does for WGSL's
 //! `dot` and `normalize` (checked by `tests/primitives.rs`).
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
@@ -138,10 +138,11 @@ impl<R: Real> V3<R> {
             self.x * o.y - self.y * o.x,
         )
     }
-    /// WGSL `normalize` as lavapipe computes it: v · (1 / √(v·v)).
+    /// WGSL `normalize` as lavapipe computes it: v / √(v·v), each component divided
+    /// (not multiplied by a reciprocal: that differs in about half the cases).
     pub fn normalize(self) -> Self {
-        let s = R::ONE / self.dot(self).sqrt();
-        self * s
+        let len = self.dot(self).sqrt();
+        V3::new(self.x / len, self.y / len, self.z / len)
     }
     /// `v[k]` for k in 0..3 (WGSL's dynamic vector index).
     pub fn get(self, k: u32) -> R {

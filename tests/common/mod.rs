@@ -1,0 +1,115 @@
+//! Shared by the integration tests: one GPU per test process, a seeded RNG, helpers.
+#![allow(dead_code)]
+
+use std::sync::OnceLock;
+
+use glint::gpu::Gpu;
+use wgpu::util::DeviceExt;
+
+/// The process's GPU. Panics (fails the test) when there is no adapter, unless
+/// `GLINT_SKIP_GPU=1`, in which case it says loudly that the test is skipped and returns None.
+pub fn gpu() -> Option<&'static Gpu> {
+    static GPU: OnceLock<Result<Gpu, String>> = OnceLock::new();
+    let skip = std::env::var("GLINT_SKIP_GPU").is_ok_and(|v| v == "1");
+    if skip {
+        eprintln!(
+            "\n*** GLINT_SKIP_GPU=1: SKIPPING this GPU test; it did NOT run and proves nothing. ***\n"
+        );
+        return None;
+    }
+    let adapter = std::env::var("GLINT_ADAPTER").ok();
+    match GPU.get_or_init(|| Gpu::new(adapter.as_deref()).map_err(|e| e.to_string())) {
+        Ok(g) => Some(g),
+        Err(e) => panic!(
+            "no GPU for the GPU tests: {e}\n(set GLINT_SKIP_GPU=1 to skip them explicitly)"
+        ),
+    }
+}
+
+/// Whether the GPU is Mesa's lavapipe, where bit-exact agreement is asserted.
+pub fn is_lavapipe(gpu: &Gpu) -> bool {
+    let i = &gpu.info;
+    i.name.to_lowercase().contains("llvmpipe") || i.driver.to_lowercase().contains("llvmpipe")
+}
+
+/// SplitMix64: small, seeded, good enough for test inputs.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in [lo, hi), rounded to f32.
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        (lo as f64 + (hi as f64 - lo as f64) * self.unit()) as f32
+    }
+}
+
+/// Runs a probe shader with `input` at binding 0 and `out_len` vec4s at binding 1.
+pub fn run_probe(gpu: &Gpu, src: &str, input: &[[f32; 4]], out_len: usize) -> Vec<[f32; 4]> {
+    let d = &gpu.device;
+    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: None,
+        source: wgpu::ShaderSource::Wgsl(src.into()),
+    });
+    let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: None,
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let inb = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: bytemuck::cast_slice(input),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let size = (out_len * 16) as u64;
+    let outb = d.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let staging = d.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: inb.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: outb.as_entire_binding() },
+        ],
+    });
+    let mut enc = d.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bg, &[]);
+        pass.dispatch_workgroups((input.len() as u32 / 2).div_ceil(64), 1, 1);
+    }
+    enc.copy_buffer_to_buffer(&outb, 0, &staging, 0, size);
+    gpu.queue.submit([enc.finish()]);
+    let slice = staging.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |r| r.expect("map"));
+    d.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
+    let v = bytemuck::cast_slice::<u8, [f32; 4]>(&slice.get_mapped_range().expect("mapped")).to_vec();
+    staging.unmap();
+    v
+}
