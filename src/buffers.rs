@@ -205,7 +205,7 @@ pub struct SceneBuffers {
 
 /// The integer form of a Phong exponent for `Material::n_int`.
 pub fn exponent_as_int(n: f32) -> i32 {
-    if n >= 0.0 && n <= 16_777_216.0 && n.fract() == 0.0 {
+    if (0.0..=16_777_216.0).contains(&n) && n.fract() == 0.0 {
         n as i32
     } else {
         -1

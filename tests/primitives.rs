@@ -31,7 +31,12 @@ fn rust_probe(a: V3<f32>, b: V3<f32>) -> [[f32; 4]; 4] {
     [
         [n.x, n.y, n.z, a.dot(b)],
         [ab.x, ab.y, ab.z, a.x.abs().sqrt()],
-        [a.y * b.z - a.z * b.y, a.x * b.y + a.z, (a.x + 0.5) / b.y * 2.0 - 1.0, 1.0 / a.z],
+        [
+            a.y * b.z - a.z * b.y,
+            a.x * b.y + a.z,
+            (a.x + 0.5) / b.y * 2.0 - 1.0,
+            1.0 / a.z,
+        ],
         [d.x, d.y, d.z, a.x * a.y * a.z],
     ]
 }
@@ -44,14 +49,23 @@ fn gpu_arithmetic_matches_rust_bit_for_bit() {
     let mut input = Vec::with_capacity(2 * n);
     for _ in 0..2 * n {
         let s = 10f32.powi(rng.range(-6.0, 6.0) as i32);
-        input.push([rng.range(-1.0, 1.0) * s, rng.range(-1.0, 1.0) * s, rng.range(-1.0, 1.0) * s, 0.0]);
+        input.push([
+            rng.range(-1.0, 1.0) * s,
+            rng.range(-1.0, 1.0) * s,
+            rng.range(-1.0, 1.0) * s,
+            0.0,
+        ]);
     }
     let out = common::run_probe(gpu, PROBE, &input, 4 * n);
     let mut bad = 0;
     let mut first = None;
     for i in 0..n {
         let a = V3::new(input[2 * i][0], input[2 * i][1], input[2 * i][2]);
-        let b = V3::new(input[2 * i + 1][0], input[2 * i + 1][1], input[2 * i + 1][2]);
+        let b = V3::new(
+            input[2 * i + 1][0],
+            input[2 * i + 1][1],
+            input[2 * i + 1][2],
+        );
         let want = rust_probe(a, b);
         for (k, row) in want.iter().enumerate() {
             for c in 0..4 {

@@ -7,6 +7,9 @@
 //! fields of [`Globals`]. Un-idiomatic Rust (`if !(x > 0)`, index loops, early returns) is
 //! kept where it keeps a line comparable with its WGSL line.
 
+// `!(x > 0)` is not `x <= 0` for NaN; the shader writes it so, on purpose, and so does its mirror.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::buffers::{
     HitOut, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, RayIn, SceneBuffers,
     Specialisation, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE,

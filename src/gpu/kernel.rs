@@ -140,7 +140,7 @@ fn storage_buffer<T: Pod + Default>(
 
 fn check_size(device: &wgpu::Device, what: &'static str, needed: u64) -> Result<(), GpuError> {
     let l = device.limits();
-    let limit = (l.max_storage_buffer_binding_size as u64).min(l.max_buffer_size);
+    let limit = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
     if needed > limit {
         return Err(GpuError::TooLarge {
             what,
@@ -154,7 +154,7 @@ fn check_size(device: &wgpu::Device, what: &'static str, needed: u64) -> Result<
 /// The rows of each tile of a `width`×`height` frame, within the device's limits.
 pub fn tile_rows(device: &wgpu::Device, width: u32, height: u32) -> u32 {
     let l = device.limits();
-    let bytes = (l.max_storage_buffer_binding_size as u64).min(l.max_buffer_size);
+    let bytes = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
     let max_pixels = (bytes / 16).min(MAX_TILE_PIXELS);
     let by_pixels = (max_pixels / width as u64).max(1);
     let by_dispatch = l.max_compute_workgroups_per_dimension as u64 * RENDER_WORKGROUP as u64;

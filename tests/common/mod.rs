@@ -20,9 +20,9 @@ pub fn gpu() -> Option<&'static Gpu> {
     let adapter = std::env::var("GLINT_ADAPTER").ok();
     match GPU.get_or_init(|| Gpu::new(adapter.as_deref()).map_err(|e| e.to_string())) {
         Ok(g) => Some(g),
-        Err(e) => panic!(
-            "no GPU for the GPU tests: {e}\n(set GLINT_SKIP_GPU=1 to skip them explicitly)"
-        ),
+        Err(e) => {
+            panic!("no GPU for the GPU tests: {e}\n(set GLINT_SKIP_GPU=1 to skip them explicitly)")
+        }
     }
 }
 
@@ -93,8 +93,14 @@ pub fn run_probe(gpu: &Gpu, src: &str, input: &[[f32; 4]], out_len: usize) -> Ve
         label: None,
         layout: &pipeline.get_bind_group_layout(0),
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: inb.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: outb.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: inb.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: outb.as_entire_binding(),
+            },
         ],
     });
     let mut enc = d.create_command_encoder(&Default::default());
@@ -109,7 +115,68 @@ pub fn run_probe(gpu: &Gpu, src: &str, input: &[[f32; 4]], out_len: usize) -> Ve
     let slice = staging.slice(..);
     slice.map_async(wgpu::MapMode::Read, |r| r.expect("map"));
     d.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
-    let v = bytemuck::cast_slice::<u8, [f32; 4]>(&slice.get_mapped_range().expect("mapped")).to_vec();
+    let v =
+        bytemuck::cast_slice::<u8, [f32; 4]>(&slice.get_mapped_range().expect("mapped")).to_vec();
     staging.unmap();
     v
+}
+
+use glint::buffers::{SceneBuffers, Specialisation};
+use glint::compare::{Diff, diff};
+use glint::image::Image;
+use glint::scene::{Scene, TriangleAlgorithm};
+
+/// The five seed scenes.
+pub const SEED_SCENES: [&str; 5] = ["sphere", "triangle", "umbrella", "bb8", "mitsubishi"];
+
+/// Loads `scenes/NAME.toml` from the crate root.
+pub fn seed_scene(name: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(format!("{name}.toml"));
+    Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The scene's buffers at `w`×`h` with `algo`, and its specialisation.
+pub fn buffers(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    algo: TriangleAlgorithm,
+) -> (SceneBuffers, Specialisation) {
+    let buf = SceneBuffers::new(scene, w, h, algo);
+    let spec = Specialisation::for_scene(&buf);
+    (buf, spec)
+}
+
+/// Renders on the GPU.
+pub fn render_gpu(gpu: &Gpu, buf: &SceneBuffers, spec: Specialisation) -> Image {
+    gpu.kernel
+        .render(&gpu.device, &gpu.queue, buf, spec, &mut |_, _| {})
+        .expect("GPU render")
+        .0
+}
+
+/// The agreement GPU and CPU images must reach: on lavapipe every f32 bit of every pixel
+/// and every hit/miss; on other adapters (whose `dot`, `normalize` and fusing differ) at
+/// most 0.1% of pixels off by at most 1/255, and 0.01% hit/miss disagreements.
+pub fn check_agreement(gpu_img: &Image, cpu_img: &Image, lavapipe: bool) -> Result<Diff, String> {
+    let d = diff(gpu_img, cpu_img);
+    let ok = if lavapipe {
+        d.differing_bits == 0 && d.hit_miss == 0
+    } else {
+        d.differing_pixels * 1000 <= d.pixels && d.max_u8 <= 1 && d.hit_miss * 10_000 <= d.pixels
+    };
+    if ok {
+        Ok(d)
+    } else {
+        Err(format!(
+            "GPU and CPU images disagree ({}): {d:?}",
+            if lavapipe {
+                "lavapipe: bit-exact required"
+            } else {
+                "tolerance"
+            }
+        ))
+    }
 }

@@ -1,0 +1,116 @@
+//! The GPU kernel against its CPU mirror, on every seed scene with every triangle
+//! algorithm: bit for bit on lavapipe.
+
+mod common;
+
+use common::{SEED_SCENES, buffers, check_agreement, render_gpu, seed_scene};
+use glint::buffers::RayIn;
+use glint::scene::TriangleAlgorithm;
+
+#[test]
+fn seed_scenes_agree_on_every_algorithm() {
+    let Some(gpu) = common::gpu() else { return };
+    let lavapipe = common::is_lavapipe(gpu);
+    for name in SEED_SCENES {
+        let scene = seed_scene(name);
+        for algo in TriangleAlgorithm::ALL {
+            let (buf, spec) = buffers(&scene, 640, 480, algo);
+            let g = render_gpu(gpu, &buf, spec);
+            let c = glint::cpu::render_f32(&buf, spec);
+            assert!(
+                !g.is_blank() && g.hit_count() > 1000,
+                "{name}/{algo}: GPU image is blank"
+            );
+            assert!(
+                !c.is_blank() && c.hit_count() > 1000,
+                "{name}/{algo}: CPU image is blank"
+            );
+            let d =
+                check_agreement(&g, &c, lavapipe).unwrap_or_else(|e| panic!("{name}/{algo}: {e}"));
+            eprintln!(
+                "{name}/{algo}: {} differing pixels, {} hit/miss",
+                d.differing_pixels, d.hit_miss
+            );
+        }
+    }
+}
+
+/// The twin: one pixel changed by one ULP, or one hit turned into a miss, fails the check.
+#[test]
+fn agreement_check_fails_on_perturbed_image() {
+    let scene = seed_scene("umbrella");
+    let (buf, spec) = buffers(&scene, 64, 48, TriangleAlgorithm::MollerTrumbore);
+    let c = glint::cpu::render_f32(&buf, spec);
+    assert!(check_agreement(&c, &c, true).is_ok());
+    let mut ulp = c.clone();
+    let k = ulp
+        .pixels
+        .iter()
+        .position(|p| p[3] >= 0.0 && p[0] > 0.0)
+        .expect("a lit pixel");
+    ulp.pixels[k][0] = f32::from_bits(ulp.pixels[k][0].to_bits() + 1);
+    assert!(
+        check_agreement(&ulp, &c, true).is_err(),
+        "one ULP must fail on lavapipe"
+    );
+    let mut miss = c.clone();
+    miss.pixels[k][3] = -1.0;
+    assert!(check_agreement(&miss, &c, true).is_err());
+    let mut many = c.clone();
+    for p in many.pixels.iter_mut().step_by(7) {
+        p[1] = (p[1] + 0.5) % 1.0;
+    }
+    assert!(
+        check_agreement(&many, &c, false).is_err(),
+        "gross differences must fail the tolerance too"
+    );
+}
+
+/// The `query` entry point: random rays into the BB-8 scene give the same hits, bit for bit.
+#[test]
+fn query_entry_point_agrees() {
+    let Some(gpu) = common::gpu() else { return };
+    let scene = seed_scene("bb8");
+    let mut rng = common::Rng::new(11);
+    let rays: Vec<RayIn> = (0..20_000)
+        .map(|_| RayIn {
+            origin: [
+                rng.range(-3.0, 3.0),
+                rng.range(-3.0, 3.0),
+                rng.range(3.0, 8.0),
+            ],
+            t_min: 0.0,
+            dir: [rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), -1.0],
+            t_max: f32::MAX,
+        })
+        .collect();
+    for algo in TriangleAlgorithm::ALL {
+        let (buf, spec) = buffers(&scene, 64, 64, algo);
+        let g = gpu
+            .kernel
+            .query(&gpu.device, &gpu.queue, &buf, spec, &rays)
+            .expect("query");
+        let c = glint::cpu::query_f32(&buf, spec, &rays);
+        let hits = c
+            .iter()
+            .filter(|h| h.prim != glint::buffers::PRIM_NONE)
+            .count();
+        assert!(
+            hits > 2000,
+            "{algo}: only {hits} hits: the rays miss the scene"
+        );
+        if common::is_lavapipe(gpu) {
+            let bad = g
+                .iter()
+                .zip(&c)
+                .filter(|(a, b)| bytemuck::bytes_of(*a) != bytemuck::bytes_of(*b))
+                .count();
+            assert_eq!(
+                bad,
+                0,
+                "{algo}: {bad} of {} query results differ",
+                rays.len()
+            );
+        }
+    }
+}

@@ -1,0 +1,173 @@
+//! The shader parses and validates with naga, and every struct shared with it has the size
+//! and field offsets that naga gives the WGSL struct of the same name. No GPU needed.
+
+use std::mem::{offset_of, size_of};
+
+use glint::buffers::{HitOut, Light, Material, Params, RayIn, Sphere, Triangle};
+use glint::gpu::SHADER_SOURCE;
+
+fn module() -> naga::Module {
+    naga::front::wgsl::parse_str(SHADER_SOURCE)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(SHADER_SOURCE)))
+}
+
+/// (size, [(field, offset)]) of WGSL struct `name`, by naga's layouter.
+fn wgsl_layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).expect("layout");
+    for (handle, ty) in module.types.iter() {
+        if ty.name.as_deref() == Some(name) {
+            if let naga::TypeInner::Struct { members, .. } = &ty.inner {
+                let fields = members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                    .collect();
+                return (layouter[handle].size, fields);
+            }
+        }
+    }
+    panic!("no WGSL struct {name}");
+}
+
+macro_rules! check_struct {
+    ($module:expr, $ty:ty, $wgsl:literal, [$($field:ident),* $(,)?]) => {{
+        let (size, fields) = wgsl_layout($module, $wgsl);
+        assert_eq!(size as usize, size_of::<$ty>(), "size of {} vs WGSL {}", stringify!($ty), $wgsl);
+        let rust: Vec<(String, u32)> = vec![$((stringify!($field).to_string(), offset_of!($ty, $field) as u32)),*];
+        assert_eq!(fields, rust, "fields and offsets of {} vs WGSL {}", stringify!($ty), $wgsl);
+    }};
+}
+
+#[test]
+fn shader_parses_and_validates() {
+    let module = module();
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{}", e.emit_to_string(SHADER_SOURCE)));
+    for entry in ["render", "query"] {
+        assert!(
+            module.entry_points.iter().any(|e| e.name == entry),
+            "no entry point {entry}"
+        );
+    }
+}
+
+#[test]
+fn shared_structs_match_wgsl() {
+    let m = module();
+    check_struct!(
+        &m,
+        Params,
+        "Params",
+        [
+            eye,
+            width,
+            forward,
+            height,
+            right,
+            tan_half,
+            up,
+            aspect,
+            ambient,
+            n_spheres,
+            background,
+            n_triangles,
+            n_lights,
+            tile_x,
+            tile_y,
+            tile_width,
+            tile_height,
+            _pad0,
+            _pad1,
+            _pad2
+        ]
+    );
+    check_struct!(
+        &m,
+        Sphere,
+        "Sphere",
+        [center, radius, material, _pad0, _pad1, _pad2]
+    );
+    check_struct!(&m, Triangle, "Triangle", [a, material, b, _pad0, c, _pad1]);
+    check_struct!(&m, Material, "Material", [ka, model, kd, n, ks, n_int]);
+    check_struct!(&m, Light, "Light", [position, _pad0, color, _pad1]);
+    check_struct!(&m, RayIn, "RayIn", [origin, t_min, dir, t_max]);
+    check_struct!(&m, HitOut, "HitOut", [t, prim, u, v]);
+}
+
+/// The twin: a struct that drifted (a field moved) is caught by the same comparison.
+#[test]
+#[should_panic(expected = "fields and offsets")]
+fn layout_check_catches_drift() {
+    #[repr(C)]
+    struct Drifted {
+        center: [f32; 3],
+        material: u32,
+        radius: f32,
+        _pad0: u32,
+        _pad1: u32,
+        _pad2: u32,
+    }
+    let m = module();
+    check_struct!(
+        &m,
+        Drifted,
+        "Sphere",
+        [center, material, radius, _pad0, _pad1, _pad2]
+    );
+}
+
+/// The WGSL constants that name Rust constants carry the same values.
+#[test]
+fn shader_constants_match_rust() {
+    let m = module();
+    let find = |name: &str| -> naga::Literal {
+        let (_, c) = m
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("no const {name}"));
+        match m.global_expressions[c.init] {
+            naga::Expression::Literal(l) => l,
+            ref e => panic!("{name}: not a literal: {e:?}"),
+        }
+    };
+    use glint::buffers::*;
+    assert_eq!(find("MODEL_AMBIENT"), naga::Literal::U32(MODEL_AMBIENT));
+    assert_eq!(find("MODEL_DIFFUSE"), naga::Literal::U32(MODEL_DIFFUSE));
+    assert_eq!(find("MODEL_PHONG"), naga::Literal::U32(MODEL_PHONG));
+    assert_eq!(find("TRIANGLE_NAIVE"), naga::Literal::U32(TRIANGLE_NAIVE));
+    assert_eq!(
+        find("TRIANGLE_MOLLER_TRUMBORE"),
+        naga::Literal::U32(TRIANGLE_MOLLER_TRUMBORE)
+    );
+    assert_eq!(
+        find("TRIANGLE_WATERTIGHT"),
+        naga::Literal::U32(TRIANGLE_WATERTIGHT)
+    );
+    assert_eq!(find("PRIM_NONE"), naga::Literal::U32(PRIM_NONE));
+    assert_eq!(find("TRIANGLE_BIT"), naga::Literal::U32(TRIANGLE_BIT));
+    assert_eq!(find("INFINITY"), naga::Literal::F32(INFINITY));
+    assert_eq!(find("SHADOW_EPSILON"), naga::Literal::F32(SHADOW_EPSILON));
+    assert_eq!(find("SPLITTER"), naga::Literal::F32(SPLITTER));
+    // Every override the pipeline sets exists in the shader.
+    let spec = Specialisation {
+        has_spheres: true,
+        has_triangles: true,
+        triangle_algo: 0,
+        uses_diffuse: true,
+        uses_phong: true,
+        shadows: false,
+    };
+    for (name, _) in spec.constants() {
+        assert!(
+            m.overrides
+                .iter()
+                .any(|(_, o)| o.name.as_deref() == Some(name)),
+            "no override {name}"
+        );
+    }
+}
