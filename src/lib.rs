@@ -16,4 +16,5 @@ pub mod compare;
 pub mod cpu;
 pub mod gpu;
 pub mod image;
+pub mod oracle;
 pub mod scene;

@@ -180,3 +180,88 @@ pub fn check_agreement(gpu_img: &Image, cpu_img: &Image, lavapipe: bool) -> Resu
         ))
     }
 }
+
+use glint::buffers::{self, HitOut, RayIn};
+
+/// Bare geometry as buffers: one Phong material, no lights, the given triangle algorithm.
+pub fn geometry(
+    spheres: Vec<buffers::Sphere>,
+    triangles: Vec<buffers::Triangle>,
+    algo: TriangleAlgorithm,
+) -> (SceneBuffers, Specialisation) {
+    let params = buffers::Params {
+        width: 1,
+        height: 1,
+        n_spheres: spheres.len() as u32,
+        n_triangles: triangles.len() as u32,
+        tile_width: 1,
+        tile_height: 1,
+        ..Default::default()
+    };
+    let buf = SceneBuffers {
+        params,
+        spheres,
+        triangles,
+        materials: vec![buffers::Material {
+            ka: [1.0; 3],
+            model: buffers::MODEL_AMBIENT,
+            ..Default::default()
+        }],
+        lights: vec![],
+        triangle_algo: algo.code(),
+        shadows: false,
+    };
+    let spec = Specialisation::for_scene(&buf);
+    (buf, spec)
+}
+
+/// A triangle from three points.
+pub fn tri(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> buffers::Triangle {
+    buffers::Triangle {
+        a,
+        b,
+        c,
+        ..Default::default()
+    }
+}
+
+/// The rays through the CPU mirror and, when there is a GPU, through the shader's `query`
+/// entry point; on lavapipe the two must agree bit for bit. Returns the CPU's answers.
+pub fn query_both(
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    rays: &[RayIn],
+    what: &str,
+) -> Vec<HitOut> {
+    let cpu = glint::cpu::query_f32(buf, spec, rays);
+    if let Some(gpu) = gpu() {
+        let g = gpu
+            .kernel
+            .query(&gpu.device, &gpu.queue, buf, spec, rays)
+            .expect("GPU query");
+        let bad = g
+            .iter()
+            .zip(&cpu)
+            .filter(|(a, b)| bytemuck::bytes_of(*a) != bytemuck::bytes_of(*b))
+            .count();
+        let hit_miss = g
+            .iter()
+            .zip(&cpu)
+            .filter(|(a, b)| (a.prim == buffers::PRIM_NONE) != (b.prim == buffers::PRIM_NONE))
+            .count();
+        if is_lavapipe(gpu) {
+            assert_eq!(
+                bad,
+                0,
+                "{what}: {bad} of {} GPU query results differ from the CPU's",
+                rays.len()
+            );
+        } else {
+            assert_eq!(
+                hit_miss, 0,
+                "{what}: {hit_miss} hit/miss disagreements between GPU and CPU"
+            );
+        }
+    }
+    cpu
+}

@@ -1,0 +1,120 @@
+//! The oracle for hit or miss: exact orientation predicates (Shewchuk's, from the `robust`
+//! crate) for triangles, f64 for spheres. It decides what a ray of f32 inputs really hits,
+//! so that the tracers' leaks and false hits can be counted.
+//!
+//! Assumption: `origin + dir` is exact in f64 (true when their exponents differ by less than
+//! 29, which every test ray satisfies); the hit point of a ray is then on the line through
+//! two exactly known points.
+
+use robust::{Coord, Coord3D, orient2d, orient3d};
+
+use crate::buffers::{RayIn, SceneBuffers, Sphere, TRIANGLE_BIT, Triangle};
+
+fn c3(p: [f64; 3]) -> Coord3D<f64> {
+    Coord3D {
+        x: p[0],
+        y: p[1],
+        z: p[2],
+    }
+}
+
+fn widen(p: [f32; 3]) -> [f64; 3] {
+    p.map(f64::from)
+}
+
+/// Whether a triangle has exactly zero area (each coordinate projection is degenerate).
+pub fn triangle_is_degenerate(tri: &Triangle) -> bool {
+    let (a, b, c) = (widen(tri.a), widen(tri.b), widen(tri.c));
+    let proj = |i: usize, j: usize| {
+        orient2d(
+            Coord { x: a[i], y: a[j] },
+            Coord { x: b[i], y: b[j] },
+            Coord { x: c[i], y: c[j] },
+        )
+    };
+    proj(0, 1) == 0.0 && proj(1, 2) == 0.0 && proj(2, 0) == 0.0
+}
+
+/// The exact answer to "does the ray hit the closed triangle at some t in (t_min, t_max)":
+/// `Some(t)` (t in f64, approximate; hit or miss exact), or `None`. A ray in the
+/// triangle's plane and a degenerate triangle never hit, as in every tracer.
+pub fn hit_triangle(ray: &RayIn, tri: &Triangle) -> Option<f64> {
+    if triangle_is_degenerate(tri) {
+        return None;
+    }
+    let o = widen(ray.origin);
+    let d = widen(ray.dir);
+    let p = [o[0] + d[0], o[1] + d[1], o[2] + d[2]];
+    let (a, b, c) = (c3(widen(tri.a)), c3(widen(tri.b)), c3(widen(tri.c)));
+    let (co, cp) = (c3(o), c3(p));
+    // The line crosses the closed triangle iff the three edge orientations agree in sign.
+    let s = [
+        orient3d(co, cp, a, b),
+        orient3d(co, cp, b, c),
+        orient3d(co, cp, c, a),
+    ];
+    let pos = s.iter().any(|&x| x > 0.0);
+    let neg = s.iter().any(|&x| x < 0.0);
+    if pos && neg || (!pos && !neg) {
+        return None; // outside, or the line lies in the plane
+    }
+    // Where along the line: t = side(o) / (side(o) − side(p)).
+    let so = orient3d(a, b, c, co);
+    let sp = orient3d(a, b, c, cp);
+    if so == sp {
+        return None; // parallel (cannot happen when the line crosses, kept for safety)
+    }
+    let t = so / (so - sp);
+    (t > ray.t_min as f64 && t < ray.t_max as f64).then_some(t)
+}
+
+/// The nearest root of the sphere in (t_min, t_max) in f64, or `None`.
+pub fn hit_sphere(ray: &RayIn, s: &Sphere) -> Option<f64> {
+    let o = widen(ray.origin);
+    let d = widen(ray.dir);
+    let c = widen(s.center);
+    let r = s.radius as f64;
+    let f = [o[0] - c[0], o[1] - c[1], o[2] - c[2]];
+    let a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    let b = -(f[0] * d[0] + f[1] * d[1] + f[2] * d[2]);
+    let perp = [
+        f[0] + d[0] * (b / a),
+        f[1] + d[1] * (b / a),
+        f[2] + d[2] * (b / a),
+    ];
+    let disc = a * (r * r - (perp[0] * perp[0] + perp[1] * perp[1] + perp[2] * perp[2]));
+    if !(disc >= 0.0) {
+        return None;
+    }
+    let q = b + b.signum() * disc.sqrt();
+    let cc = f[0] * f[0] + f[1] * f[1] + f[2] * f[2] - r * r;
+    let (t0, t1) = (cc / q, q / a);
+    let (near, far) = if t0 < t1 { (t0, t1) } else { (t1, t0) };
+    let inside = |t: f64| t > ray.t_min as f64 && t < ray.t_max as f64;
+    if inside(near) {
+        Some(near)
+    } else if inside(far) {
+        Some(far)
+    } else {
+        None
+    }
+}
+
+/// The nearest hit over the whole scene: `(t, prim)` with `TRIANGLE_BIT` on triangles.
+pub fn closest_hit(buf: &SceneBuffers, ray: &RayIn) -> Option<(f64, u32)> {
+    let mut best: Option<(f64, u32)> = None;
+    let mut consider = |t: Option<f64>, prim: u32| {
+        if let Some(t) = t {
+            if best.is_none_or(|(bt, _)| t < bt) {
+                best = Some((t, prim));
+            }
+        }
+    };
+    for (k, s) in buf.spheres.iter().enumerate() {
+        consider(hit_sphere(ray, s), k as u32);
+    }
+    for (k, tri) in buf.triangles.iter().enumerate() {
+        consider(hit_triangle(ray, tri), k as u32 | TRIANGLE_BIT);
+    }
+    best
+}
