@@ -83,7 +83,7 @@ pub fn hit_sphere(ray: &RayIn, s: &Sphere) -> Option<f64> {
         f[2] + d[2] * (b / a),
     ];
     let disc = a * (r * r - (perp[0] * perp[0] + perp[1] * perp[1] + perp[2] * perp[2]));
-    if !(disc >= 0.0) {
+    if disc.is_nan() || disc < 0.0 {
         return None;
     }
     let q = b + b.signum() * disc.sqrt();
