@@ -71,6 +71,27 @@ enum Command {
         #[arg(long, default_value = "diff.png")]
         diff: PathBuf,
     },
+    /// Speed against error: every scene × tracer × triangle algorithm, with a warm-up and
+    /// timed runs; writes report.md, report.json and plot.png to --out.
+    Bench {
+        /// Scene files (default: the five seed scenes in scenes/).
+        scenes: Vec<PathBuf>,
+        /// Image size WxH (default 1024x768).
+        #[arg(long, value_parser = parse_size, default_value = "1024x768")]
+        size: (u32, u32),
+        /// Timed runs per configuration.
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        /// Output folder.
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+        /// Use the first Vulkan adapter whose name contains this.
+        #[arg(long)]
+        adapter: Option<String>,
+        /// Skip the GPU (CPU tracers only).
+        #[arg(long)]
+        no_gpu: bool,
+    },
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -184,6 +205,14 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
+        Command::Bench {
+            scenes,
+            size,
+            runs,
+            out,
+            adapter,
+            no_gpu,
+        } => bench(scenes, size, runs, out, adapter, no_gpu),
         Command::Compare {
             scene,
             size,
@@ -223,6 +252,72 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
     }
+}
+
+fn bench(
+    scenes: Vec<PathBuf>,
+    size: (u32, u32),
+    runs: usize,
+    out: PathBuf,
+    adapter: Option<String>,
+    no_gpu: bool,
+) -> Result<()> {
+    if cfg!(debug_assertions) {
+        eprintln!("warning: a debug build: build with --release for figures that mean anything");
+    }
+    let paths = if scenes.is_empty() {
+        ["sphere", "triangle", "umbrella", "bb8", "mitsubishi"]
+            .iter()
+            .map(|s| PathBuf::from(format!("scenes/{s}.toml")))
+            .collect()
+    } else {
+        scenes
+    };
+    let mut list = Vec::new();
+    for p in &paths {
+        let name = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        list.push((name, load(p)?));
+    }
+    let gpu = if no_gpu {
+        None
+    } else {
+        Some(Gpu::new(adapter.as_deref())?)
+    };
+    let report = glint::bench::run(
+        &list,
+        Some(size),
+        runs,
+        gpu.as_ref(),
+        &mut |done, total, label| {
+            let width = 30;
+            let filled = done * width / total.max(1);
+            eprint!(
+                "\r[{}{}] {done}/{total} {label:<30}",
+                "#".repeat(filled),
+                ".".repeat(width - filled)
+            );
+            if done == total {
+                eprintln!();
+            }
+        },
+    )?;
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    let md = report.markdown();
+    print!("{md}");
+    std::fs::write(out.join("report.md"), &md)?;
+    std::fs::write(
+        out.join("report.json"),
+        serde_json::to_string_pretty(&report)?,
+    )?;
+    report.plot().save(out.join("plot.png"))?;
+    eprintln!(
+        "wrote {0}/report.md, {0}/report.json, {0}/plot.png",
+        out.display()
+    );
+    Ok(())
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {
