@@ -407,9 +407,30 @@ fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     return best;
 }
 
-/// Whether anything lies on the segment from `origin` along `dir` in (t_min, t_max).
-fn occluded(ray: Ray, t_min: f32, t_max: f32) -> bool {
-    return closest_hit(ray, t_min, t_max).prim != PRIM_NONE;
+/// Whether anything but primitive `skip` lies on the ray in (t_min, t_max); stops at the
+/// first hit. A convex primitive (a sphere, a flat triangle) cannot shadow a point of its
+/// own where N·L > 0, so skipping the one that was hit loses no shadow and removes all
+/// self-shadowing, whatever the rounding of the hit point.
+fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+    if HAS_SPHERES {
+        for (var k = 0u; k < params.n_spheres; k = k + 1u) {
+            if k != skip && hit_sphere(ray, spheres[k], t_min, t_max) < t_max {
+                return true;
+            }
+        }
+    }
+    if HAS_TRIANGLES {
+        var sh = Shear(0u, 1u, 2u, 0.0, 0.0, 1.0);
+        if TRIANGLE_ALGO == TRIANGLE_WATERTIGHT {
+            sh = make_shear(ray.dir);
+        }
+        for (var k = 0u; k < params.n_triangles; k = k + 1u) {
+            if (k | TRIANGLE_BIT) != skip && hit_triangle(ray, sh, triangles[k], t_min, t_max).x < t_max {
+                return true;
+            }
+        }
+    }
+    return false;
 }
 
 // ---- shading -----------------------------------------------------------------------------
@@ -483,7 +504,7 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
             if SHADOWS {
                 let o = shadow_origin(p, n);
                 let d = light.position - o;
-                if occluded(Ray(o, d), 0.0, 1.0) {
+                if occluded(Ray(o, d), 0.0, 1.0, hit.prim) {
                     continue;
                 }
             }

@@ -447,9 +447,37 @@ pub fn closest_hit<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> 
     best
 }
 
-/// WGSL `occluded`: whether anything lies on the ray in (t_min, t_max).
-pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> bool {
-    closest_hit(g, ray, t_min, t_max).prim != PRIM_NONE
+/// WGSL `occluded`: whether anything but primitive `skip` lies on the ray in
+/// (t_min, t_max); stops at the first hit.
+pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+    if g.spec.has_spheres {
+        for k in 0..g.buf.params.n_spheres {
+            if k != skip && hit_sphere(ray, &g.buf.spheres[k as usize], t_min, t_max) < t_max {
+                return true;
+            }
+        }
+    }
+    if g.spec.has_triangles {
+        let mut sh = Shear {
+            kx: 0,
+            ky: 1,
+            kz: 2,
+            sx: R::ZERO,
+            sy: R::ZERO,
+            sz: R::ONE,
+        };
+        if g.spec.triangle_algo == TRIANGLE_WATERTIGHT {
+            sh = make_shear(ray.dir);
+        }
+        for k in 0..g.buf.params.n_triangles {
+            if (k | TRIANGLE_BIT) != skip
+                && hit_triangle(g, ray, sh, &g.buf.triangles[k as usize], t_min, t_max).0 < t_max
+            {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 // ---- shading -----------------------------------------------------------------------------
@@ -525,7 +553,7 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
             if g.spec.shadows {
                 let o = shadow_origin(p, n);
                 let d = position - o;
-                if occluded(g, Ray { origin: o, dir: d }, R::ZERO, R::ONE) {
+                if occluded(g, Ray { origin: o, dir: d }, R::ZERO, R::ONE, hit.prim) {
                     continue;
                 }
             }
