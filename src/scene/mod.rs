@@ -212,11 +212,18 @@ fn syntax_error(src: &str, path: &Path, e: &toml::de::Error) -> SceneError {
     let span = e.span().unwrap_or(0..0);
     let message = e.message().trim().to_string();
     // serde names the field in backticks ("unknown field `foo`", "missing field `bar`");
-    // otherwise the key is the text under the span, when that is short.
+    // otherwise the key is the one assigned on the error's line, or the text under the span.
+    let line = line_of(src, span.start);
+    let line_key = src.lines().nth(line - 1).and_then(|l| {
+        let (k, _) = l.split_once('=')?;
+        let k = k.trim();
+        (!k.is_empty() && !k.starts_with('[') && !k.starts_with('#')).then(|| k.to_string())
+    });
     let key = message
         .split('`')
         .nth(1)
         .map(str::to_string)
+        .or(line_key)
         .or_else(|| {
             let s = src.get(span.clone())?.trim();
             (!s.is_empty() && s.len() <= 40 && !s.contains('\n')).then(|| s.to_string())

@@ -1,0 +1,167 @@
+//! Bad scene input: each case gives an error naming the file, the line and the key, never
+//! a panic.
+
+use glint::scene::{Scene, SceneError};
+
+const GOOD: &str = r#"ambient = [0.2, 0.2, 0.2]
+[camera]
+eye = [0.0, 0.0, 5.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov = 45.0
+width = 64
+height = 48
+[[lights]]
+position = [1.0, 1.0, 1.0]
+color = [1.0, 1.0, 1.0]
+[materials.red]
+model = "phong"
+ka = [1.0, 0.0, 0.0]
+kd = [1.0, 0.0, 0.0]
+ks = [1.0, 1.0, 1.0]
+n = 28.0
+[[spheres]]
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+material = "red"
+[[triangles]]
+vertices = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]]
+material = "red"
+"#;
+
+/// Parses GOOD with `from` replaced by `to`, expecting an error at `line` naming `key`.
+fn bad(from: &str, to: &str, line: usize, key: &str) -> SceneError {
+    assert!(GOOD.contains(from), "{from:?} not in the scene");
+    let src = GOOD.replacen(from, to, 1);
+    let e = Scene::parse(&src, "bad.toml".as_ref()).expect_err(&format!("{to:?} was accepted"));
+    let text = e.to_string();
+    assert!(text.starts_with("bad.toml:"), "{text}");
+    assert_eq!(e.line(), Some(line), "{text}");
+    assert!(
+        e.key().is_some_and(|k| k.contains(key)),
+        "key {key:?} not in {text}"
+    );
+    e
+}
+
+#[test]
+fn the_good_scene_parses() {
+    let s = Scene::parse(GOOD, "good.toml".as_ref()).unwrap();
+    assert_eq!(
+        (s.spheres.len(), s.triangles.len(), s.materials.len()),
+        (1, 1, 1)
+    );
+}
+
+#[test]
+fn malformed_unknown_and_missing() {
+    bad("fov = 45.0", "fov = 45.0.0", 6, "fov");
+    bad("fov = 45.0", "fov = 45.0\nzoom = 2", 7, "zoom");
+    bad("radius = 1.0\n", "", 18, "radius"); // the [[spheres]] table that lacks it
+    bad("fov = 45.0", "fov = \"wide\"", 6, "fov");
+}
+
+#[test]
+fn out_of_domain_values() {
+    bad("radius = 1.0", "radius = nan", 20, "spheres[0].radius");
+    bad("radius = 1.0", "radius = -1.0", 20, "spheres[0].radius");
+    bad("radius = 1.0", "radius = 0.0", 20, "spheres[0].radius");
+    bad(
+        "center = [0.0, 0.0, 0.0]",
+        "center = [inf, 0.0, 0.0]",
+        19,
+        "spheres[0].center",
+    );
+    bad("n = 28.0", "n = -2.0", 17, "materials.red.n");
+    bad(
+        "material = \"red\"",
+        "material = \"blue\"",
+        21,
+        "spheres[0].material",
+    );
+    bad(
+        "model = \"phong\"",
+        "model = \"pbr\"",
+        13,
+        "materials.red.model",
+    );
+    bad("width = 64", "width = 0", 7, "camera.width");
+    bad("width = 64", "width = 100000000", 7, "camera.width");
+    bad("fov = 45.0", "fov = 180.0", 6, "camera.fov");
+    bad(
+        "look_at = [0.0, 0.0, 0.0]",
+        "look_at = [0.0, 0.0, 5.0]",
+        4,
+        "camera.look_at",
+    );
+    bad(
+        "up = [0.0, 1.0, 0.0]",
+        "up = [0.0, 0.0, 2.0]",
+        5,
+        "camera.up",
+    );
+    bad(
+        "color = [1.0, 1.0, 1.0]",
+        "color = [1.0, -1.0, 1.0]",
+        11,
+        "lights[0].color",
+    );
+    bad(
+        "vertices = [[-1.0, -1.0, 0.0]",
+        "vertices = [[nan, -1.0, 0.0]",
+        23,
+        "triangles[0].vertices",
+    );
+}
+
+#[test]
+fn zero_area_triangle_is_a_warning() {
+    let src = GOOD.replace("[0.0, 1.0, 0.0]]", "[2.0, -1.0, 0.0]]");
+    let s = Scene::parse(&src, "w.toml".as_ref()).unwrap();
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("w.toml:23") && w.contains("zero area")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
+fn missing_file_and_non_utf8() {
+    let e = Scene::load("/nonexistent/scene.toml").unwrap_err();
+    assert!(e.to_string().contains("/nonexistent/scene.toml"));
+    let dir = std::env::temp_dir().join(format!("glint-errors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("latin1.toml");
+    std::fs::write(&p, b"ambient = [0.2, 0.2, 0.2]\n# caf\xe9\n").unwrap();
+    let e = Scene::load(&p).unwrap_err();
+    assert_eq!(e.line(), Some(2), "{e}");
+    let m = dir.join("mesh.toml");
+    std::fs::write(
+        &m,
+        GOOD.to_string() + "[[meshes]]\nfile = \"missing.obj\"\nmaterial = \"red\"\n",
+    )
+    .unwrap();
+    let e = Scene::load(&m).unwrap_err();
+    assert!(
+        e.to_string().contains("missing.obj") && e.line() == Some(26),
+        "{e}"
+    );
+    std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
+    std::fs::write(
+        &m,
+        GOOD.to_string() + "[[meshes]]\nfile = \"bad.obj\"\nmaterial = \"red\"\n",
+    )
+    .unwrap();
+    let e = Scene::load(&m).unwrap_err();
+    assert!(e.to_string().contains("bad.obj"), "{e}");
+    std::fs::write(dir.join("empty.obj"), "# nothing\n").unwrap();
+    std::fs::write(
+        &m,
+        GOOD.to_string() + "[[meshes]]\nfile = \"empty.obj\"\nmaterial = \"red\"\n",
+    )
+    .unwrap();
+    let e = Scene::load(&m).unwrap_err();
+    assert!(e.to_string().contains("empty"), "{e}");
+}
