@@ -367,6 +367,14 @@ fn hit_triangle_watertight(ray: Ray, sh: Shear, tri: Triangle, t_min: f32, t_max
     return vec3<f32>(t, v * inv_det, w * inv_det);
 }
 
+/// The ray's shear when the watertight test is compiled in, else an unused identity.
+fn ray_shear(dir: vec3<f32>) -> Shear {
+    if TRIANGLE_ALGO == TRIANGLE_WATERTIGHT {
+        return make_shear(dir);
+    }
+    return Shear(0u, 1u, 2u, 0.0, 0.0, 1.0);
+}
+
 /// The scene's triangle algorithm (a pipeline constant, so only one is compiled).
 fn hit_triangle(ray: Ray, sh: Shear, tri: Triangle, t_min: f32, t_max: f32) -> vec3<f32> {
     if TRIANGLE_ALGO == TRIANGLE_NAIVE {
@@ -393,10 +401,7 @@ fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
         }
     }
     if HAS_TRIANGLES {
-        var sh = Shear(0u, 1u, 2u, 0.0, 0.0, 1.0);
-        if TRIANGLE_ALGO == TRIANGLE_WATERTIGHT {
-            sh = make_shear(ray.dir);
-        }
+        let sh = ray_shear(ray.dir);
         for (var k = 0u; k < params.n_triangles; k = k + 1u) {
             let h = hit_triangle(ray, sh, triangles[k], t_min, best.t);
             if h.x < best.t {
@@ -420,10 +425,7 @@ fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
         }
     }
     if HAS_TRIANGLES {
-        var sh = Shear(0u, 1u, 2u, 0.0, 0.0, 1.0);
-        if TRIANGLE_ALGO == TRIANGLE_WATERTIGHT {
-            sh = make_shear(ray.dir);
-        }
+        let sh = ray_shear(ray.dir);
         for (var k = 0u; k < params.n_triangles; k = k + 1u) {
             if (k | TRIANGLE_BIT) != skip && hit_triangle(ray, sh, triangles[k], t_min, t_max).x < t_max {
                 return true;

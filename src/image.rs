@@ -69,9 +69,8 @@ impl Image {
 
     /// Whether some pixel's colour differs from another's (a blank image has one colour).
     pub fn is_blank(&self) -> bool {
-        let first = self.to_rgb8().get(..3).map(|s| s.to_vec());
         let rgb = self.to_rgb8();
-        rgb.chunks_exact(3).all(|c| Some(c.to_vec()) == first)
+        rgb.chunks_exact(3).all(|c| c == &rgb[..3])
     }
 
     /// How many pixels the primary ray hit.

@@ -81,20 +81,3 @@ pub fn query_f32(buf: &SceneBuffers, spec: Specialisation, rays: &[RayIn]) -> Ve
     };
     rays.par_iter().map(|r| trace::query(&g, r)).collect()
 }
-
-/// The `query` entry point in f64 (the same algorithm, widened).
-pub fn query_f64(buf: &SceneBuffers, spec: Specialisation, rays: &[RayIn]) -> Vec<HitOut> {
-    let p = &buf.params;
-    let cam = Camera {
-        eye: V3::from_f32(p.eye),
-        forward: V3::from_f32(p.forward),
-        right: V3::from_f32(p.right),
-        up: V3::from_f32(p.up),
-        tan_half: p.tan_half as f64,
-        aspect: p.aspect as f64,
-        width: p.width,
-        height: p.height,
-    };
-    let g = Globals { cam, buf, spec };
-    rays.par_iter().map(|r| trace::query(&g, r)).collect()
-}

@@ -378,6 +378,21 @@ pub fn hit_triangle_watertight<R: Real>(
     (t, v * inv_det, w * inv_det)
 }
 
+/// WGSL `ray_shear`: the ray's shear when the watertight test is in use, else an identity.
+pub fn ray_shear<R: Real>(g: &Globals<R>, dir: V3<R>) -> Shear<R> {
+    if g.spec.triangle_algo == TRIANGLE_WATERTIGHT {
+        return make_shear(dir);
+    }
+    Shear {
+        kx: 0,
+        ky: 1,
+        kz: 2,
+        sx: R::ZERO,
+        sy: R::ZERO,
+        sz: R::ONE,
+    }
+}
+
 /// WGSL `hit_triangle`: the scene's triangle algorithm.
 pub fn hit_triangle<R: Real>(
     g: &Globals<R>,
@@ -421,17 +436,7 @@ pub fn closest_hit<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> 
         }
     }
     if g.spec.has_triangles {
-        let mut sh = Shear {
-            kx: 0,
-            ky: 1,
-            kz: 2,
-            sx: R::ZERO,
-            sy: R::ZERO,
-            sz: R::ONE,
-        };
-        if g.spec.triangle_algo == TRIANGLE_WATERTIGHT {
-            sh = make_shear(ray.dir);
-        }
+        let sh = ray_shear(g, ray.dir);
         for k in 0..g.buf.params.n_triangles {
             let h = hit_triangle(g, ray, sh, &g.buf.triangles[k as usize], t_min, best.t);
             if h.0 < best.t {
@@ -458,17 +463,7 @@ pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: 
         }
     }
     if g.spec.has_triangles {
-        let mut sh = Shear {
-            kx: 0,
-            ky: 1,
-            kz: 2,
-            sx: R::ZERO,
-            sy: R::ZERO,
-            sz: R::ONE,
-        };
-        if g.spec.triangle_algo == TRIANGLE_WATERTIGHT {
-            sh = make_shear(ray.dir);
-        }
+        let sh = ray_shear(g, ray.dir);
         for k in 0..g.buf.params.n_triangles {
             if (k | TRIANGLE_BIT) != skip
                 && hit_triangle(g, ray, sh, &g.buf.triangles[k as usize], t_min, t_max).0 < t_max
