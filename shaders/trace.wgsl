@@ -27,6 +27,8 @@ override USES_DIFFUSE: bool = true;
 override USES_PHONG: bool = true;
 /// Hard shadows: one `occluded` ray per light.
 override SHADOWS: bool = false;
+/// Traverse the BVH (`nodes`, `prim_ids`); else test every primitive (tiny scenes).
+override USE_BVH: bool = true;
 
 // ---- constants (each one's story is in `src/buffers.rs`) ------------------------------
 
@@ -41,6 +43,8 @@ const TRIANGLE_BIT: u32 = 0x80000000u;
 const INFINITY: f32 = 3.40282347e38; // f32::MAX: a t that every real hit beats
 const SHADOW_EPSILON: f32 = 1.1920929e-7; // see buffers::SHADOW_EPSILON
 const SPLITTER: f32 = 4097.0; // 2^12 + 1, Veltkamp's split for f32
+const BVH_STACK: u32 = 48u; // bvh::MAX_DEPTH: the builder never makes a deeper tree
+const BOX_SLACK: f32 = 4.76837158e-7; // 4 ε ≥ 2γ(3): pbrt's conservative slab test
 
 // ---- shared structs (Rust: src/buffers.rs) --------------------------------------------
 
@@ -62,9 +66,9 @@ struct Params {
     tile_y: u32,
     tile_width: u32,
     tile_height: u32,
+    n_nodes: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 
 struct Sphere {
@@ -83,6 +87,13 @@ struct Triangle {
     _pad0: u32,
     c: vec3<f32>,
     _pad1: u32,
+}
+
+struct BvhNode {
+    lo: vec3<f32>,
+    first: u32,
+    hi: vec3<f32>,
+    count_axis: u32,
 }
 
 struct Material {
@@ -123,6 +134,8 @@ struct HitOut {
 @group(0) @binding(5) var<storage, read_write> image: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> rays: array<RayIn>;
 @group(0) @binding(7) var<storage, read_write> hits: array<HitOut>;
+@group(0) @binding(8) var<storage, read> nodes: array<BvhNode>;
+@group(0) @binding(9) var<storage, read> prim_ids: array<u32>;
 
 // ---- small helpers ---------------------------------------------------------------------
 
@@ -390,7 +403,7 @@ fn hit_triangle(ray: Ray, sh: Shear, tri: Triangle, t_min: f32, t_max: f32) -> v
 
 /// The nearest hit in (t_min, t_max) over every sphere, then every triangle; the first
 /// primitive wins ties. `prim` is PRIM_NONE on a miss.
-fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
+fn closest_hit_all(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
     if HAS_SPHERES {
         for (var k = 0u; k < params.n_spheres; k = k + 1u) {
@@ -412,11 +425,9 @@ fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     return best;
 }
 
-/// Whether anything but primitive `skip` lies on the ray in (t_min, t_max); stops at the
-/// first hit. A convex primitive (a sphere, a flat triangle) cannot shadow a point of its
-/// own where N·L > 0, so skipping the one that was hit loses no shadow and removes all
-/// self-shadowing, whatever the rounding of the hit point.
-fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+/// Whether anything but primitive `skip` lies on the ray in (t_min, t_max), testing every
+/// primitive; stops at the first hit.
+fn occluded_all(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
     if HAS_SPHERES {
         for (var k = 0u; k < params.n_spheres; k = k + 1u) {
             if k != skip && hit_sphere(ray, spheres[k], t_min, t_max) < t_max {
@@ -433,6 +444,165 @@ fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
         }
     }
     return false;
+}
+
+// ---- the BVH -----------------------------------------------------------------------------
+
+/// Primitive `id` (a sphere index, or a triangle index with TRIANGLE_BIT): (t, u, v) with
+/// t = INFINITY on a miss.
+fn hit_prim(ray: Ray, sh: Shear, id: u32, t_min: f32, t_max: f32) -> vec3<f32> {
+    if (id & TRIANGLE_BIT) != 0u {
+        if HAS_TRIANGLES {
+            return hit_triangle(ray, sh, triangles[id & ~TRIANGLE_BIT], t_min, t_max);
+        }
+        return vec3<f32>(INFINITY, 0.0, 0.0);
+    }
+    if HAS_SPHERES {
+        return vec3<f32>(hit_sphere(ray, spheres[id], t_min, t_max), 0.0, 0.0);
+    }
+    return vec3<f32>(INFINITY, 0.0, 0.0);
+}
+
+/// Whether the ray's interval (t_min, t_max) meets the node's box: the slab test, each
+/// exit distance widened by 2γ(3) of itself (pbrt), so rounding never loses a box the exact
+/// ray enters. NaN slabs (a zero direction component at a slab's plane) constrain nothing.
+/// `inv_dir` is 1 / dir per component (±inf for a zero component).
+fn hit_box(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_min: f32, t_max: f32) -> bool {
+    let t_lo = (node.lo - origin) * inv_dir;
+    let t_hi = (node.hi - origin) * inv_dir;
+    var t0 = t_min;
+    var t1 = t_max;
+    for (var k = 0u; k < 3u; k = k + 1u) {
+        var near = t_lo[k];
+        var far = t_hi[k];
+        if near > far {
+            near = t_hi[k];
+            far = t_lo[k];
+        }
+        far = far + abs(far) * BOX_SLACK;
+        if near > t0 {
+            t0 = near;
+        }
+        if far < t1 {
+            t1 = far;
+        }
+    }
+    return t0 <= t1;
+}
+
+/// The bound to test against when `best` is the nearest hit so far: one ULP past best.t,
+/// so that a tie is seen and the lower id can win it, whatever order the BVH visits in.
+fn tie_bound(best: Hit) -> f32 {
+    if best.prim != PRIM_NONE && best.t > 0.0 && best.t <= INFINITY {
+        return bitcast<f32>(bitcast<u32>(best.t) + 1u);
+    }
+    return best.t;
+}
+
+/// Whether a hit at t on primitive `id` beats `best`: nearer, or as near with a lower id
+/// (the rule that `closest_hit_all` keeps by visiting in id order).
+fn nearer(t: f32, id: u32, best: Hit) -> bool {
+    return t < best.t || (t == best.t && id < best.prim && best.prim != PRIM_NONE);
+}
+
+/// `closest_hit` through the BVH: depth first, the child on the ray's side of the split
+/// first, a fixed stack (the builder bounds the depth) and at most one step per node, so a
+/// NaN ray cannot loop. Same result as `closest_hit_all`.
+fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
+    var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
+    let sh = ray_shear(ray.dir);
+    let inv_dir = 1.0 / ray.dir;
+    var stack: array<u32, BVH_STACK>;
+    var sp = 0u;
+    var at = 0u;
+    for (var step = 0u; step < params.n_nodes; step = step + 1u) {
+        let node = nodes[at];
+        if hit_box(node, ray.origin, inv_dir, t_min, tie_bound(best)) {
+            let count = node.count_axis >> 2u;
+            if count == 0u {
+                if ray.dir[node.count_axis] < 0.0 {
+                    stack[sp] = at + 1u;
+                    at = node.first;
+                } else {
+                    stack[sp] = node.first;
+                    at = at + 1u;
+                }
+                sp = sp + 1u;
+                continue;
+            }
+            for (var k = node.first; k < node.first + count; k = k + 1u) {
+                let id = prim_ids[k];
+                let h = hit_prim(ray, sh, id, t_min, tie_bound(best));
+                if nearer(h.x, id, best) {
+                    best = Hit(h.x, id, h.y, h.z);
+                }
+            }
+        }
+        if sp == 0u {
+            break;
+        }
+        sp = sp - 1u;
+        at = stack[sp];
+    }
+    return best;
+}
+
+/// `occluded` through the BVH, in `closest_hit_bvh`'s order; stops at the first hit.
+fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+    let sh = ray_shear(ray.dir);
+    let inv_dir = 1.0 / ray.dir;
+    var stack: array<u32, BVH_STACK>;
+    var sp = 0u;
+    var at = 0u;
+    for (var step = 0u; step < params.n_nodes; step = step + 1u) {
+        let node = nodes[at];
+        if hit_box(node, ray.origin, inv_dir, t_min, t_max) {
+            let count = node.count_axis >> 2u;
+            if count == 0u {
+                if ray.dir[node.count_axis] < 0.0 {
+                    stack[sp] = at + 1u;
+                    at = node.first;
+                } else {
+                    stack[sp] = node.first;
+                    at = at + 1u;
+                }
+                sp = sp + 1u;
+                continue;
+            }
+            for (var k = node.first; k < node.first + count; k = k + 1u) {
+                let id = prim_ids[k];
+                if id != skip && hit_prim(ray, sh, id, t_min, t_max).x < t_max {
+                    return true;
+                }
+            }
+        }
+        if sp == 0u {
+            break;
+        }
+        sp = sp - 1u;
+        at = stack[sp];
+    }
+    return false;
+}
+
+/// The nearest hit in (t_min, t_max); of hits at the same t, the lowest primitive id
+/// (spheres before triangles). `prim` is PRIM_NONE on a miss.
+fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
+    if USE_BVH {
+        return closest_hit_bvh(ray, t_min, t_max);
+    }
+    return closest_hit_all(ray, t_min, t_max);
+}
+
+/// Whether anything but primitive `skip` lies on the ray in (t_min, t_max); stops at the
+/// first hit. A convex primitive (a sphere, a flat triangle) cannot shadow a point of its
+/// own where N·L > 0, so skipping the one that was hit loses no shadow and removes all
+/// self-shadowing, whatever the rounding of the hit point.
+fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+    if USE_BVH {
+        return occluded_bvh(ray, t_min, t_max, skip);
+    }
+    return occluded_all(ray, t_min, t_max, skip);
 }
 
 // ---- shading -----------------------------------------------------------------------------

@@ -9,6 +9,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::bvh::Bvh;
 use crate::scene::{Model, Scene, TriangleAlgorithm};
 
 /// Material model `ambient`: only Ia·ka.
@@ -37,6 +38,10 @@ pub const INFINITY: f32 = f32::MAX;
 /// The relative size of a shadow ray's offset along the normal, in units of the hit
 /// point's largest coordinate (at least 1): 64 ε of f32, about 7.6e-6. WGSL: `SHADOW_EPSILON * 64`.
 pub const SHADOW_EPSILON: f32 = f32::EPSILON;
+
+/// The relative slack of the BVH's box test: 2γ(3) = 6u/(1 − 3u) with u = 2^-24, rounded
+/// up to 4 ε (pbrt's conservative slab test). WGSL: `BOX_SLACK`.
+pub const BOX_SLACK: f32 = 4.0 * f32::EPSILON;
 
 /// Veltkamp's splitter for f32 (2^12 + 1), used by Dekker's exact product. WGSL: `SPLITTER`.
 pub const SPLITTER: f32 = 4097.0;
@@ -79,12 +84,12 @@ pub struct Params {
     pub tile_width: u32,
     /// Tile height in pixels. Offset 112.
     pub tile_height: u32,
-    /// Offset 116.
-    pub _pad0: u32,
+    /// Number of BVH nodes (0 for an empty scene). Offset 116.
+    pub n_nodes: u32,
     /// Offset 120.
-    pub _pad1: u32,
+    pub _pad0: u32,
     /// Offset 124.
-    pub _pad2: u32,
+    pub _pad1: u32,
 }
 
 /// A sphere. Must match WGSL `struct Sphere` (32 bytes).
@@ -121,6 +126,23 @@ pub struct Triangle {
     pub c: [f32; 3],
     /// Offset 44.
     pub _pad1: u32,
+}
+
+/// A node of the flattened BVH (see [`crate::bvh`]). Must match WGSL `struct BvhNode`
+/// (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    /// Lower corner of the box. Offset 0.
+    pub lo: [f32; 3],
+    /// Interior: index of the second child (the first is the next node). Leaf: index of
+    /// the first primitive id in `prim_ids`. Offset 12.
+    pub first: u32,
+    /// Upper corner of the box. Offset 16.
+    pub hi: [f32; 3],
+    /// `count << 2 | axis`: a leaf has count > 0 (and axis 0); an interior node has
+    /// count 0 and its split axis, which orders the visit. Offset 28.
+    pub count_axis: u32,
 }
 
 /// A material. Must match WGSL `struct Material` (48 bytes).
@@ -197,6 +219,10 @@ pub struct SceneBuffers {
     pub materials: Vec<Material>,
     /// Point lights.
     pub lights: Vec<Light>,
+    /// BVH nodes over every sphere and triangle, depth-first.
+    pub nodes: Vec<BvhNode>,
+    /// Primitive ids in BVH leaf order.
+    pub prim_ids: Vec<u32>,
     /// The triangle algorithm (`TRIANGLE_*`).
     pub triangle_algo: u32,
     /// Whether shadow rays are traced.
@@ -243,7 +269,7 @@ impl SceneBuffers {
             tile_height: height,
             ..Params::default()
         };
-        let materials = scene
+        let materials: Vec<Material> = scene
             .materials
             .iter()
             .map(|m| Material {
@@ -259,7 +285,7 @@ impl SceneBuffers {
                 n_int: exponent_as_int(m.n),
             })
             .collect();
-        let spheres = scene
+        let spheres: Vec<Sphere> = scene
             .spheres
             .iter()
             .map(|s| Sphere {
@@ -269,7 +295,7 @@ impl SceneBuffers {
                 ..Sphere::default()
             })
             .collect();
-        let triangles = scene
+        let triangles: Vec<Triangle> = scene
             .triangles
             .iter()
             .map(|t| Triangle {
@@ -289,14 +315,45 @@ impl SceneBuffers {
                 ..Light::default()
             })
             .collect();
-        SceneBuffers {
+        SceneBuffers::assemble(
             params,
             spheres,
             triangles,
             materials,
             lights,
+            algo,
+            scene.shadows,
+        )
+    }
+
+    /// Puts buffers together from their parts and builds the BVH over the primitives;
+    /// `params.n_spheres`, `n_triangles`, `n_lights` and `n_nodes` are set from the parts.
+    pub fn assemble(
+        params: Params,
+        spheres: Vec<Sphere>,
+        triangles: Vec<Triangle>,
+        materials: Vec<Material>,
+        lights: Vec<Light>,
+        algo: TriangleAlgorithm,
+        shadows: bool,
+    ) -> Self {
+        let bvh = Bvh::build(&spheres, &triangles);
+        SceneBuffers {
+            params: Params {
+                n_spheres: spheres.len() as u32,
+                n_triangles: triangles.len() as u32,
+                n_lights: lights.len() as u32,
+                n_nodes: bvh.nodes.len() as u32,
+                ..params
+            },
+            spheres,
+            triangles,
+            materials,
+            lights,
+            nodes: bvh.nodes,
+            prim_ids: bvh.prim_ids,
             triangle_algo: algo.code(),
-            shadows: scene.shadows,
+            shadows,
         }
     }
 }
@@ -317,7 +374,13 @@ pub struct Specialisation {
     pub uses_phong: bool,
     /// WGSL `SHADOWS`.
     pub shadows: bool,
+    /// WGSL `USE_BVH`: traverse the BVH (else test every primitive).
+    pub use_bvh: bool,
 }
+
+/// Scenes with at most this many primitives are traced by testing every primitive: a
+/// handful of intersection tests costs less than a traversal.
+pub const BRUTE_FORCE_MAX: usize = 16;
 
 impl Specialisation {
     /// Only what `buf` uses: "model only what a scene needs".
@@ -329,6 +392,7 @@ impl Specialisation {
             uses_diffuse: buf.materials.iter().any(|m| m.model != MODEL_AMBIENT),
             uses_phong: buf.materials.iter().any(|m| m.model == MODEL_PHONG),
             shadows: buf.shadows,
+            use_bvh: buf.spheres.len() + buf.triangles.len() > BRUTE_FORCE_MAX,
         }
     }
 
@@ -342,11 +406,17 @@ impl Specialisation {
             uses_diffuse: true,
             uses_phong: true,
             shadows: buf.shadows,
+            use_bvh: true,
         }
     }
 
+    /// The same pipeline with the BVH on or off.
+    pub fn with_bvh(self, use_bvh: bool) -> Self {
+        Specialisation { use_bvh, ..self }
+    }
+
     /// The `(name, value)` pairs for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 6] {
+    pub fn constants(&self) -> [(&'static str, f64); 7] {
         let b = |x: bool| if x { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -355,6 +425,7 @@ impl Specialisation {
             ("USES_DIFFUSE", b(self.uses_diffuse)),
             ("USES_PHONG", b(self.uses_phong)),
             ("SHADOWS", b(self.shadows)),
+            ("USE_BVH", b(self.use_bvh)),
         ]
     }
 }

@@ -13,6 +13,7 @@
 
 pub mod bench;
 pub mod buffers;
+pub mod bvh;
 pub mod compare;
 pub mod cpu;
 pub mod gpu;

@@ -3,7 +3,7 @@
 
 use std::mem::{offset_of, size_of};
 
-use glint::buffers::{HitOut, Light, Material, Params, RayIn, Sphere, Triangle};
+use glint::buffers::{BvhNode, HitOut, Light, Material, Params, RayIn, Sphere, Triangle};
 use glint::gpu::SHADER_SOURCE;
 
 fn module() -> naga::Module {
@@ -80,9 +80,9 @@ fn shared_structs_match_wgsl() {
             tile_y,
             tile_width,
             tile_height,
+            n_nodes,
             _pad0,
-            _pad1,
-            _pad2
+            _pad1
         ]
     );
     check_struct!(
@@ -93,6 +93,7 @@ fn shared_structs_match_wgsl() {
     );
     check_struct!(&m, Triangle, "Triangle", [a, material, b, _pad0, c, _pad1]);
     check_struct!(&m, Material, "Material", [ka, model, kd, n, ks, n_int]);
+    check_struct!(&m, BvhNode, "BvhNode", [lo, first, hi, count_axis]);
     check_struct!(&m, Light, "Light", [position, _pad0, color, _pad1]);
     check_struct!(&m, RayIn, "RayIn", [origin, t_min, dir, t_max]);
     check_struct!(&m, HitOut, "HitOut", [t, prim, u, v]);
@@ -153,6 +154,11 @@ fn shader_constants_match_rust() {
     assert_eq!(find("INFINITY"), naga::Literal::F32(INFINITY));
     assert_eq!(find("SHADOW_EPSILON"), naga::Literal::F32(SHADOW_EPSILON));
     assert_eq!(find("SPLITTER"), naga::Literal::F32(SPLITTER));
+    assert_eq!(find("BOX_SLACK"), naga::Literal::F32(BOX_SLACK));
+    assert_eq!(
+        find("BVH_STACK"),
+        naga::Literal::U32(glint::bvh::MAX_DEPTH as u32)
+    );
     // Every override the pipeline sets exists in the shader.
     let spec = Specialisation {
         has_spheres: true,
@@ -161,6 +167,7 @@ fn shader_constants_match_rust() {
         uses_diffuse: true,
         uses_phong: true,
         shadows: false,
+        use_bvh: true,
     };
     for (name, _) in spec.constants() {
         assert!(

@@ -32,6 +32,10 @@ pub trait Real:
     const SPLITTER: Self;
     /// The relative shadow-ray offset unit (machine epsilon).
     const EPSILON: Self;
+    /// 2γ(3) rounded up (4 ε), the relative slack of the conservative box test (pbrt).
+    const BOX_SLACK: Self;
+    /// WGSL `bitcast<f32>(bitcast<u32>(x) + 1u)`: the next float up, for positive finite x.
+    fn bits_plus_one(self) -> Self;
     /// Exact conversion from f32.
     fn from_f32(x: f32) -> Self;
     /// Conversion from u32 (exact below 2^24 for f32).
@@ -52,6 +56,10 @@ impl Real for f32 {
     const INFINITY: Self = crate::buffers::INFINITY;
     const SPLITTER: Self = crate::buffers::SPLITTER;
     const EPSILON: Self = crate::buffers::SHADOW_EPSILON;
+    const BOX_SLACK: Self = crate::buffers::BOX_SLACK;
+    fn bits_plus_one(self) -> Self {
+        f32::from_bits(self.to_bits().wrapping_add(1))
+    }
     fn from_f32(x: f32) -> Self {
         x
     }
@@ -78,6 +86,10 @@ impl Real for f64 {
     const INFINITY: Self = f64::MAX;
     const SPLITTER: Self = 134_217_729.0; // 2^27 + 1
     const EPSILON: Self = f64::EPSILON;
+    const BOX_SLACK: Self = 4.0 * f64::EPSILON;
+    fn bits_plus_one(self) -> Self {
+        f64::from_bits(self.to_bits().wrapping_add(1))
+    }
     fn from_f32(x: f32) -> Self {
         x as f64
     }
@@ -191,6 +203,13 @@ impl<R: Real> Mul<R> for V3<R> {
     type Output = Self;
     fn mul(self, s: R) -> Self {
         V3::new(self.x * s, self.y * s, self.z * s)
+    }
+}
+
+impl<R: Real> Div for V3<R> {
+    type Output = Self;
+    fn div(self, o: Self) -> Self {
+        V3::new(self.x / o.x, self.y / o.y, self.z / o.z)
     }
 }
 

@@ -11,11 +11,14 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::buffers::{
-    HitOut, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, RayIn, SceneBuffers,
+    BvhNode, HitOut, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, RayIn, SceneBuffers,
     Specialisation, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE,
     TRIANGLE_WATERTIGHT, Triangle,
 };
 use crate::cpu::real::{Real, V3};
+
+/// WGSL `BVH_STACK`: the traversal stack, as deep as the builder lets a tree be.
+pub const BVH_STACK: usize = crate::bvh::MAX_DEPTH;
 
 /// The camera, in the tracer's precision. WGSL: the camera fields of `params`.
 #[derive(Clone, Copy, Debug)]
@@ -413,9 +416,9 @@ pub fn hit_triangle<R: Real>(
 
 // ---- the scene ---------------------------------------------------------------------------
 
-/// WGSL `closest_hit`: the nearest hit in (t_min, t_max), spheres first; the first
+/// WGSL `closest_hit_all`: the nearest hit in (t_min, t_max), spheres first; the first
 /// primitive wins ties.
-pub fn closest_hit<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
+pub fn closest_hit_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
     let mut best = Hit {
         t: t_max,
         prim: PRIM_NONE,
@@ -452,9 +455,8 @@ pub fn closest_hit<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> 
     best
 }
 
-/// WGSL `occluded`: whether anything but primitive `skip` lies on the ray in
-/// (t_min, t_max); stops at the first hit.
-pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+/// WGSL `occluded_all`: whether anything but `skip` lies on the ray, testing every primitive.
+pub fn occluded_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
     if g.spec.has_spheres {
         for k in 0..g.buf.params.n_spheres {
             if k != skip && hit_sphere(ray, &g.buf.spheres[k as usize], t_min, t_max) < t_max {
@@ -473,6 +475,176 @@ pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: 
         }
     }
     false
+}
+
+// ---- the BVH -----------------------------------------------------------------------------
+
+/// WGSL `hit_prim`: primitive `id`, (t, u, v) with t = INFINITY on a miss.
+pub fn hit_prim<R: Real>(
+    g: &Globals<R>,
+    ray: Ray<R>,
+    sh: Shear<R>,
+    id: u32,
+    t_min: R,
+    t_max: R,
+) -> TriHit<R> {
+    if (id & TRIANGLE_BIT) != 0 {
+        if g.spec.has_triangles {
+            let tri = &g.buf.triangles[(id & !TRIANGLE_BIT) as usize];
+            return hit_triangle(g, ray, sh, tri, t_min, t_max);
+        }
+        return (R::INFINITY, R::ZERO, R::ZERO);
+    }
+    if g.spec.has_spheres {
+        let s = &g.buf.spheres[id as usize];
+        return (hit_sphere(ray, s, t_min, t_max), R::ZERO, R::ZERO);
+    }
+    (R::INFINITY, R::ZERO, R::ZERO)
+}
+
+/// WGSL `hit_box`: the conservative slab test of the ray's interval against a node's box.
+pub fn hit_box<R: Real>(node: &BvhNode, origin: V3<R>, inv_dir: V3<R>, t_min: R, t_max: R) -> bool {
+    let t_lo = (V3::from_f32(node.lo) - origin) * inv_dir;
+    let t_hi = (V3::from_f32(node.hi) - origin) * inv_dir;
+    let mut t0 = t_min;
+    let mut t1 = t_max;
+    for k in 0..3u32 {
+        let mut near = t_lo.get(k);
+        let mut far = t_hi.get(k);
+        if near > far {
+            near = t_hi.get(k);
+            far = t_lo.get(k);
+        }
+        far = far + far.abs() * R::BOX_SLACK;
+        if near > t0 {
+            t0 = near;
+        }
+        if far < t1 {
+            t1 = far;
+        }
+    }
+    t0 <= t1
+}
+
+/// WGSL `tie_bound`: one ULP past `best.t` once there is a hit, so ties are seen.
+pub fn tie_bound<R: Real>(best: &Hit<R>) -> R {
+    if best.prim != PRIM_NONE && best.t > R::ZERO && best.t <= R::INFINITY {
+        return best.t.bits_plus_one();
+    }
+    best.t
+}
+
+/// WGSL `nearer`: a smaller t, or the same t and a lower id.
+pub fn nearer<R: Real>(t: R, id: u32, best: &Hit<R>) -> bool {
+    t < best.t || (t == best.t && id < best.prim && best.prim != PRIM_NONE)
+}
+
+/// WGSL `closest_hit_bvh`: depth first, near child first, fixed stack, one step per node.
+pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
+    let mut best = Hit {
+        t: t_max,
+        prim: PRIM_NONE,
+        u: R::ZERO,
+        v: R::ZERO,
+    };
+    let sh = ray_shear(g, ray.dir);
+    let inv_dir = V3::splat(R::ONE) / ray.dir;
+    let mut stack = [0u32; BVH_STACK];
+    let mut sp = 0usize;
+    let mut at = 0u32;
+    let nodes = &g.buf.nodes;
+    for _step in 0..g.buf.params.n_nodes {
+        let node = &nodes[at as usize];
+        if hit_box(node, ray.origin, inv_dir, t_min, tie_bound(&best)) {
+            let count = node.count_axis >> 2;
+            if count == 0 {
+                if ray.dir.get(node.count_axis) < R::ZERO {
+                    stack[sp] = at + 1;
+                    at = node.first;
+                } else {
+                    stack[sp] = node.first;
+                    at += 1;
+                }
+                sp += 1;
+                continue;
+            }
+            for k in node.first..node.first + count {
+                let id = g.buf.prim_ids[k as usize];
+                let h = hit_prim(g, ray, sh, id, t_min, tie_bound(&best));
+                if nearer(h.0, id, &best) {
+                    best = Hit {
+                        t: h.0,
+                        prim: id,
+                        u: h.1,
+                        v: h.2,
+                    };
+                }
+            }
+        }
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        at = stack[sp];
+    }
+    best
+}
+
+/// WGSL `occluded_bvh`: `occluded` through the BVH; stops at the first hit.
+pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+    let sh = ray_shear(g, ray.dir);
+    let inv_dir = V3::splat(R::ONE) / ray.dir;
+    let mut stack = [0u32; BVH_STACK];
+    let mut sp = 0usize;
+    let mut at = 0u32;
+    let nodes = &g.buf.nodes;
+    for _step in 0..g.buf.params.n_nodes {
+        let node = &nodes[at as usize];
+        if hit_box(node, ray.origin, inv_dir, t_min, t_max) {
+            let count = node.count_axis >> 2;
+            if count == 0 {
+                if ray.dir.get(node.count_axis) < R::ZERO {
+                    stack[sp] = at + 1;
+                    at = node.first;
+                } else {
+                    stack[sp] = node.first;
+                    at += 1;
+                }
+                sp += 1;
+                continue;
+            }
+            for k in node.first..node.first + count {
+                let id = g.buf.prim_ids[k as usize];
+                if id != skip && hit_prim(g, ray, sh, id, t_min, t_max).0 < t_max {
+                    return true;
+                }
+            }
+        }
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        at = stack[sp];
+    }
+    false
+}
+
+/// WGSL `closest_hit`: the nearest hit in (t_min, t_max); of equal t, the lowest id.
+pub fn closest_hit<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
+    if g.spec.use_bvh {
+        return closest_hit_bvh(g, ray, t_min, t_max);
+    }
+    closest_hit_all(g, ray, t_min, t_max)
+}
+
+/// WGSL `occluded`: whether anything but primitive `skip` lies on the ray in (t_min,
+/// t_max). A convex primitive cannot shadow a point of its own where N·L > 0, so skipping
+/// the one that was hit loses no shadow.
+pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+    if g.spec.use_bvh {
+        return occluded_bvh(g, ray, t_min, t_max, skip);
+    }
+    occluded_all(g, ray, t_min, t_max, skip)
 }
 
 // ---- shading -----------------------------------------------------------------------------

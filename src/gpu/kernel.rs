@@ -64,6 +64,12 @@ fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+/// The scene's read-only storage bindings: spheres, triangles, materials, lights, BVH
+/// nodes, primitive ids (binding 0 is `params`).
+const SCENE_STORAGE: [u32; 6] = [1, 2, 3, 4, 8, 9];
+/// Every scene binding, in the order of `Kernel::scene_buffers`.
+const SCENE_BINDINGS: [u32; 7] = [0, 1, 2, 3, 4, 8, 9];
+
 fn scene_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
     let mut v = vec![wgpu::BindGroupLayoutEntry {
         binding: 0,
@@ -75,7 +81,7 @@ fn scene_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
         },
         count: None,
     }];
-    v.extend((1..=4).map(|b| storage_entry(b, true)));
+    v.extend(SCENE_STORAGE.iter().map(|&b| storage_entry(b, true)));
     v
 }
 
@@ -265,7 +271,7 @@ impl Kernel {
         &self,
         device: &wgpu::Device,
         buf: &SceneBuffers,
-    ) -> Result<[wgpu::Buffer; 5], GpuError> {
+    ) -> Result<[wgpu::Buffer; 7], GpuError> {
         let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params"),
             contents: bytemuck::bytes_of(&buf.params),
@@ -278,6 +284,8 @@ impl Kernel {
             storage_buffer(device, "triangles", &buf.triangles, none)?,
             storage_buffer(device, "materials", &buf.materials, none)?,
             storage_buffer(device, "lights", &buf.lights, none)?,
+            storage_buffer(device, "BVH nodes", &buf.nodes, none)?,
+            storage_buffer(device, "BVH primitive ids", &buf.prim_ids, none)?,
         ])
     }
 
@@ -320,7 +328,7 @@ impl Kernel {
             .iter()
             .enumerate()
             .map(|(k, b)| wgpu::BindGroupEntry {
-                binding: k as u32,
+                binding: SCENE_BINDINGS[k],
                 resource: b.as_entire_binding(),
             })
             .collect();
@@ -412,7 +420,7 @@ impl Kernel {
                 .iter()
                 .enumerate()
                 .map(|(k, b)| wgpu::BindGroupEntry {
-                    binding: k as u32,
+                    binding: SCENE_BINDINGS[k],
                     resource: b.as_entire_binding(),
                 })
                 .collect();

@@ -198,19 +198,19 @@ pub fn geometry(
         tile_height: 1,
         ..Default::default()
     };
-    let buf = SceneBuffers {
+    let buf = SceneBuffers::assemble(
         params,
         spheres,
         triangles,
-        materials: vec![buffers::Material {
+        vec![buffers::Material {
             ka: [1.0; 3],
             model: buffers::MODEL_AMBIENT,
             ..Default::default()
         }],
-        lights: vec![],
-        triangle_algo: algo.code(),
-        shadows: false,
-    };
+        vec![],
+        algo,
+        false,
+    );
     let spec = Specialisation::for_scene(&buf);
     (buf, spec)
 }
@@ -234,6 +234,26 @@ pub fn query_both(
     what: &str,
 ) -> Vec<HitOut> {
     let cpu = glint::cpu::query_f32(buf, spec, rays);
+    // The other traversal (BVH or every primitive) gives the same nearest hit.
+    let other = glint::cpu::query_f32(buf, spec.with_bvh(!spec.use_bvh), rays);
+    let differ = cpu
+        .iter()
+        .zip(&other)
+        .filter(|(a, b)| bytemuck::bytes_of(*a) != bytemuck::bytes_of(*b))
+        .count();
+    // The naive test accepts points well outside its triangle far from the origin (t off
+    // by up to 1e-2 relative, docs/robustness.md), beyond any box padding: there the BVH
+    // may skip a hit that brute force keeps, rarely.
+    let allowed = if spec.triangle_algo == buffers::TRIANGLE_NAIVE {
+        rays.len() / 1000
+    } else {
+        0
+    };
+    assert!(
+        differ <= allowed,
+        "{what}: BVH and brute force differ on {differ} of {} rays (allowed {allowed})",
+        rays.len()
+    );
     if let Some(gpu) = gpu() {
         let g = gpu
             .kernel
