@@ -183,15 +183,14 @@ fn build_node(refs: &mut [PrimRef], offset: usize, depth: usize) -> Node {
     // Bin every centre on all three axes in one pass, then sweep each axis for the
     // cheapest split: cost = A(left)·n(left) + A(right)·n(right), relative to A(node).
     let mut bins = [[(Aabb::EMPTY, 0usize); BINS]; 3];
-    let mut scale = [0.0f32; 3];
-    for k in 0..3 {
+    let scale = [0, 1, 2].map(|k| {
         let extent = centres.hi[k] - centres.lo[k];
-        scale[k] = if extent > 0.0 {
+        if extent > 0.0 {
             BINS as f32 / extent
         } else {
             0.0
-        };
-    }
+        }
+    });
     for r in refs.iter() {
         for k in 0..3 {
             let b = &mut bins[k][bin_of(r.centre[k], centres.lo[k], scale[k])];
@@ -201,7 +200,7 @@ fn build_node(refs: &mut [PrimRef], offset: usize, depth: usize) -> Node {
     }
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, first bin on the right)
     for k in 0..3 {
-        if !(scale[k] > 0.0) || !scale[k].is_finite() {
+        if scale[k] <= 0.0 || !scale[k].is_finite() {
             continue;
         }
         let mut right_area = [0.0f32; BINS];
