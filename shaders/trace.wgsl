@@ -463,31 +463,27 @@ fn hit_prim(ray: Ray, sh: Shear, id: u32, t_min: f32, t_max: f32) -> vec3<f32> {
     return vec3<f32>(INFINITY, 0.0, 0.0);
 }
 
-/// Whether the ray's interval (t_min, t_max) meets the node's box: the slab test, each
-/// exit distance widened by 2γ(3) of itself (pbrt), so rounding never loses a box the exact
-/// ray enters. NaN slabs (a zero direction component at a slab's plane) constrain nothing.
-/// `inv_dir` is 1 / dir per component (±inf for a zero component).
-fn hit_box(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_min: f32, t_max: f32) -> bool {
+/// The part (t0, t1) of the ray's interval (t_min, t_max) inside the node's box; the box
+/// is hit when t0 <= t1. The slab test, each exit distance widened by 2γ(3) of itself
+/// (pbrt), so rounding never loses a box that the exact ray enters. NaN slabs (a zero
+/// direction component at a slab's plane) constrain nothing. `inv_dir` is 1 / dir per
+/// component (±inf for a zero component).
+fn box_interval(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_min: f32, t_max: f32) -> vec2<f32> {
     let t_lo = (node.lo - origin) * inv_dir;
     let t_hi = (node.hi - origin) * inv_dir;
+    let swap = t_hi < t_lo;
+    let near = select(t_lo, t_hi, swap);
+    var far = select(t_hi, t_lo, swap);
+    far = far + abs(far) * BOX_SLACK;
     var t0 = t_min;
     var t1 = t_max;
-    for (var k = 0u; k < 3u; k = k + 1u) {
-        var near = t_lo[k];
-        var far = t_hi[k];
-        if near > far {
-            near = t_hi[k];
-            far = t_lo[k];
-        }
-        far = far + abs(far) * BOX_SLACK;
-        if near > t0 {
-            t0 = near;
-        }
-        if far < t1 {
-            t1 = far;
-        }
-    }
-    return t0 <= t1;
+    t0 = select(t0, near.x, near.x > t0);
+    t0 = select(t0, near.y, near.y > t0);
+    t0 = select(t0, near.z, near.z > t0);
+    t1 = select(t1, far.x, far.x < t1);
+    t1 = select(t1, far.y, far.y < t1);
+    t1 = select(t1, far.z, far.z < t1);
+    return vec2<f32>(t0, t1);
 }
 
 /// The bound to test against when `best` is the nearest hit so far: one ULP past best.t,
@@ -505,22 +501,35 @@ fn nearer(t: f32, id: u32, best: Hit) -> bool {
     return t < best.t || (t == best.t && id < best.prim && best.prim != PRIM_NONE);
 }
 
-/// `closest_hit` through the BVH: depth first, the child on the ray's side of the split
-/// first, a fixed stack (the builder bounds the depth) and at most one step per node, so a
-/// NaN ray cannot loop. Same result as `closest_hit_all`.
+/// `closest_hit` through the BVH, depth first: at an interior node both children's boxes
+/// are tested, the nearer entered first and the other pushed. A fixed stack (the builder
+/// bounds the depth) and at most one step per node, so a NaN ray cannot loop. Same result
+/// as `closest_hit_all`.
 fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
     let sh = ray_shear(ray.dir);
     let inv_dir = 1.0 / ray.dir;
+    if params.n_nodes == 0u {
+        return best;
+    }
+    let root = box_interval(nodes[0], ray.origin, inv_dir, t_min, t_max);
+    if !(root.x <= root.y) {
+        return best;
+    }
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
     var at = 0u;
     for (var step = 0u; step < params.n_nodes; step = step + 1u) {
         let node = nodes[at];
-        if hit_box(node, ray.origin, inv_dir, t_min, tie_bound(best)) {
-            let count = node.count_axis >> 2u;
-            if count == 0u {
-                if ray.dir[node.count_axis] < 0.0 {
+        let count = node.count_axis >> 2u;
+        if count == 0u {
+            let bound = tie_bound(best);
+            let left = box_interval(nodes[at + 1u], ray.origin, inv_dir, t_min, bound);
+            let right = box_interval(nodes[node.first], ray.origin, inv_dir, t_min, bound);
+            let hit_left = left.x <= left.y;
+            let hit_right = right.x <= right.y;
+            if hit_left && hit_right {
+                if right.x < left.x {
                     stack[sp] = at + 1u;
                     at = node.first;
                 } else {
@@ -530,6 +539,15 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
                 sp = sp + 1u;
                 continue;
             }
+            if hit_left {
+                at = at + 1u;
+                continue;
+            }
+            if hit_right {
+                at = node.first;
+                continue;
+            }
+        } else {
             for (var k = node.first; k < node.first + count; k = k + 1u) {
                 let id = prim_ids[k];
                 let h = hit_prim(ray, sh, id, t_min, tie_bound(best));
@@ -551,15 +569,26 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
 fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
     let sh = ray_shear(ray.dir);
     let inv_dir = 1.0 / ray.dir;
+    if params.n_nodes == 0u {
+        return false;
+    }
+    let root = box_interval(nodes[0], ray.origin, inv_dir, t_min, t_max);
+    if !(root.x <= root.y) {
+        return false;
+    }
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
     var at = 0u;
     for (var step = 0u; step < params.n_nodes; step = step + 1u) {
         let node = nodes[at];
-        if hit_box(node, ray.origin, inv_dir, t_min, t_max) {
-            let count = node.count_axis >> 2u;
-            if count == 0u {
-                if ray.dir[node.count_axis] < 0.0 {
+        let count = node.count_axis >> 2u;
+        if count == 0u {
+            let left = box_interval(nodes[at + 1u], ray.origin, inv_dir, t_min, t_max);
+            let right = box_interval(nodes[node.first], ray.origin, inv_dir, t_min, t_max);
+            let hit_left = left.x <= left.y;
+            let hit_right = right.x <= right.y;
+            if hit_left && hit_right {
+                if right.x < left.x {
                     stack[sp] = at + 1u;
                     at = node.first;
                 } else {
@@ -569,6 +598,15 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
                 sp = sp + 1u;
                 continue;
             }
+            if hit_left {
+                at = at + 1u;
+                continue;
+            }
+            if hit_right {
+                at = node.first;
+                continue;
+            }
+        } else {
             for (var k = node.first; k < node.first + count; k = k + 1u) {
                 let id = prim_ids[k];
                 if id != skip && hit_prim(ray, sh, id, t_min, t_max).x < t_max {

@@ -22,6 +22,10 @@ pub struct Row {
     pub triangle: String,
     /// Width × height.
     pub size: (u32, u32),
+    /// Spheres + triangles.
+    pub primitives: usize,
+    /// BVH build (median of the runs), ms.
+    pub build_ms: f64,
     /// Median frame time (trace + readback on the GPU), ms.
     pub median_ms: f64,
     /// Fastest frame, ms.
@@ -77,6 +81,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 pub fn run(
     scenes: &[(String, Scene)],
     size: Option<(u32, u32)>,
+    only: Option<TriangleAlgorithm>,
     runs: usize,
     gpu: Option<&Gpu>,
     progress: &mut dyn FnMut(usize, usize, &str),
@@ -87,7 +92,9 @@ pub fn run(
         .iter()
         .enumerate()
         .flat_map(|(k, (_, s))| {
-            let algos: Vec<TriangleAlgorithm> = if s.triangles.is_empty() {
+            let algos: Vec<TriangleAlgorithm> = if let Some(a) = only {
+                vec![a]
+            } else if s.triangles.is_empty() {
                 vec![s.triangle]
             } else {
                 TriangleAlgorithm::ALL.to_vec()
@@ -101,6 +108,16 @@ pub fn run(
         progress(done, total, &format!("{name} {algo}"));
         let (w, h) = size.unwrap_or(scene.size());
         let buf = SceneBuffers::new(scene, w, h, algo);
+        let build_ms = median(
+            (0..runs)
+                .map(|_| {
+                    let t0 = Instant::now();
+                    std::hint::black_box(crate::bvh::Bvh::build(&buf.spheres, &buf.triangles));
+                    ms(t0.elapsed())
+                })
+                .collect(),
+        );
+        let primitives = buf.spheres.len() + buf.triangles.len();
         let spec = Specialisation::for_scene(&buf);
         let truth = crate::cpu::render_f64(scene, &buf, spec);
         let mut row = |tracer: &str, times: Vec<f64>, img: &Image, gpu_parts: Option<[f64; 4]>| {
@@ -111,6 +128,8 @@ pub fn run(
                 tracer: tracer.into(),
                 triangle: algo.name().into(),
                 size: (w, h),
+                primitives,
+                build_ms,
                 median_ms: med,
                 min_ms: times.iter().copied().fold(f64::INFINITY, f64::min),
                 max_ms: times.iter().copied().fold(0.0, f64::max),
@@ -193,15 +212,17 @@ impl Report {
             self.cpu_threads,
             self.runs
         );
-        s += "| scene | tracer | triangles | size | median ms (min–max) | Mrays/s | compile ms | upload ms | trace ms | readback ms | max err | RMS err | px ≥1/255 | hit/miss |\n";
-        s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        s += "| scene | tracer | triangles | primitives | BVH build ms | size | median ms (min–max) | Mrays/s | compile ms | upload ms | trace ms | readback ms | max err | RMS err | px ≥1/255 | hit/miss |\n";
+        s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         let o = |x: Option<f64>| x.map(|v| format!("{v:.1}")).unwrap_or_else(|| "–".into());
         for r in &self.rows {
             s += &format!(
-                "| {} | {} | {} | {}×{} | {:.1} ({:.1}–{:.1}) | {:.2} | {} | {} | {} | {} | {:.2e} | {:.2e} | {} | {} |\n",
+                "| {} | {} | {} | {} | {:.1} | {}×{} | {:.1} ({:.1}–{:.1}) | {:.2} | {} | {} | {} | {} | {:.2e} | {:.2e} | {} | {} |\n",
                 r.scene,
                 r.tracer,
                 r.triangle,
+                r.primitives,
+                r.build_ms,
                 r.size.0,
                 r.size.1,
                 r.median_ms,

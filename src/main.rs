@@ -91,6 +91,9 @@ enum Command {
         /// Skip the GPU (CPU tracers only).
         #[arg(long)]
         no_gpu: bool,
+        /// Only this triangle algorithm (default: all three where a scene has triangles).
+        #[arg(long)]
+        triangle: Option<TriangleAlgorithm>,
     },
 }
 
@@ -212,7 +215,8 @@ fn run(cli: Cli) -> Result<()> {
             out,
             adapter,
             no_gpu,
-        } => bench(scenes, size, runs, out, adapter, no_gpu),
+            triangle,
+        } => bench(scenes, size, triangle, runs, out, adapter, no_gpu),
         Command::Compare {
             scene,
             size,
@@ -257,6 +261,7 @@ fn run(cli: Cli) -> Result<()> {
 fn bench(
     scenes: Vec<PathBuf>,
     size: (u32, u32),
+    triangle: Option<TriangleAlgorithm>,
     runs: usize,
     out: PathBuf,
     adapter: Option<String>,
@@ -289,6 +294,7 @@ fn bench(
     let report = glint::bench::run(
         &list,
         Some(size),
+        triangle,
         runs,
         gpu.as_ref(),
         &mut |done, total, label| {

@@ -156,6 +156,10 @@ impl<R: Real> V3<R> {
         let len = self.dot(self).sqrt();
         V3::new(self.x / len, self.y / len, self.z / len)
     }
+    /// WGSL `abs` per component.
+    pub fn abs(self) -> Self {
+        V3::new(self.x.abs(), self.y.abs(), self.z.abs())
+    }
     /// `v[k]` for k in 0..3 (WGSL's dynamic vector index).
     pub fn get(self, k: u32) -> R {
         match k {

@@ -502,28 +502,43 @@ pub fn hit_prim<R: Real>(
     (R::INFINITY, R::ZERO, R::ZERO)
 }
 
-/// WGSL `hit_box`: the conservative slab test of the ray's interval against a node's box.
-pub fn hit_box<R: Real>(node: &BvhNode, origin: V3<R>, inv_dir: V3<R>, t_min: R, t_max: R) -> bool {
+/// WGSL `box_interval`: the part (t0, t1) of (t_min, t_max) inside the node's box, by the
+/// conservative slab test; hit when t0 <= t1.
+pub fn box_interval<R: Real>(
+    node: &BvhNode,
+    origin: V3<R>,
+    inv_dir: V3<R>,
+    t_min: R,
+    t_max: R,
+) -> (R, R) {
     let t_lo = (V3::from_f32(node.lo) - origin) * inv_dir;
     let t_hi = (V3::from_f32(node.hi) - origin) * inv_dir;
+    let swap = (t_hi.x < t_lo.x, t_hi.y < t_lo.y, t_hi.z < t_lo.z);
+    let near = V3::new(
+        select(t_lo.x, t_hi.x, swap.0),
+        select(t_lo.y, t_hi.y, swap.1),
+        select(t_lo.z, t_hi.z, swap.2),
+    );
+    let mut far = V3::new(
+        select(t_hi.x, t_lo.x, swap.0),
+        select(t_hi.y, t_lo.y, swap.1),
+        select(t_hi.z, t_lo.z, swap.2),
+    );
+    far = far + far.abs() * R::BOX_SLACK;
     let mut t0 = t_min;
     let mut t1 = t_max;
-    for k in 0..3u32 {
-        let mut near = t_lo.get(k);
-        let mut far = t_hi.get(k);
-        if near > far {
-            near = t_hi.get(k);
-            far = t_lo.get(k);
-        }
-        far = far + far.abs() * R::BOX_SLACK;
-        if near > t0 {
-            t0 = near;
-        }
-        if far < t1 {
-            t1 = far;
-        }
-    }
-    t0 <= t1
+    t0 = select(t0, near.x, near.x > t0);
+    t0 = select(t0, near.y, near.y > t0);
+    t0 = select(t0, near.z, near.z > t0);
+    t1 = select(t1, far.x, far.x < t1);
+    t1 = select(t1, far.y, far.y < t1);
+    t1 = select(t1, far.z, far.z < t1);
+    (t0, t1)
+}
+
+/// WGSL `select(f, t, c)`: `t` when `c`, else `f`.
+pub fn select<R: Real>(f: R, t: R, c: bool) -> R {
+    if c { t } else { f }
 }
 
 /// WGSL `tie_bound`: one ULP past `best.t` once there is a hit, so ties are seen.
@@ -539,7 +554,8 @@ pub fn nearer<R: Real>(t: R, id: u32, best: &Hit<R>) -> bool {
     t < best.t || (t == best.t && id < best.prim && best.prim != PRIM_NONE)
 }
 
-/// WGSL `closest_hit_bvh`: depth first, near child first, fixed stack, one step per node.
+/// WGSL `closest_hit_bvh`: depth first, both children's boxes tested, the nearer entered
+/// first; fixed stack, one step per node.
 pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
     let mut best = Hit {
         t: t_max,
@@ -549,16 +565,28 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
     };
     let sh = ray_shear(g, ray.dir);
     let inv_dir = V3::splat(R::ONE) / ray.dir;
+    let nodes = &g.buf.nodes;
+    if g.buf.params.n_nodes == 0 {
+        return best;
+    }
+    let root = box_interval(&nodes[0], ray.origin, inv_dir, t_min, t_max);
+    if !(root.0 <= root.1) {
+        return best;
+    }
     let mut stack = [0u32; BVH_STACK];
     let mut sp = 0usize;
     let mut at = 0u32;
-    let nodes = &g.buf.nodes;
     for _step in 0..g.buf.params.n_nodes {
         let node = &nodes[at as usize];
-        if hit_box(node, ray.origin, inv_dir, t_min, tie_bound(&best)) {
-            let count = node.count_axis >> 2;
-            if count == 0 {
-                if ray.dir.get(node.count_axis) < R::ZERO {
+        let count = node.count_axis >> 2;
+        if count == 0 {
+            let bound = tie_bound(&best);
+            let left = box_interval(&nodes[at as usize + 1], ray.origin, inv_dir, t_min, bound);
+            let right = box_interval(&nodes[node.first as usize], ray.origin, inv_dir, t_min, bound);
+            let hit_left = left.0 <= left.1;
+            let hit_right = right.0 <= right.1;
+            if hit_left && hit_right {
+                if right.0 < left.0 {
                     stack[sp] = at + 1;
                     at = node.first;
                 } else {
@@ -568,6 +596,15 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
                 sp += 1;
                 continue;
             }
+            if hit_left {
+                at += 1;
+                continue;
+            }
+            if hit_right {
+                at = node.first;
+                continue;
+            }
+        } else {
             for k in node.first..node.first + count {
                 let id = g.buf.prim_ids[k as usize];
                 let h = hit_prim(g, ray, sh, id, t_min, tie_bound(&best));
@@ -594,16 +631,27 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
 pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
     let sh = ray_shear(g, ray.dir);
     let inv_dir = V3::splat(R::ONE) / ray.dir;
+    let nodes = &g.buf.nodes;
+    if g.buf.params.n_nodes == 0 {
+        return false;
+    }
+    let root = box_interval(&nodes[0], ray.origin, inv_dir, t_min, t_max);
+    if !(root.0 <= root.1) {
+        return false;
+    }
     let mut stack = [0u32; BVH_STACK];
     let mut sp = 0usize;
     let mut at = 0u32;
-    let nodes = &g.buf.nodes;
     for _step in 0..g.buf.params.n_nodes {
         let node = &nodes[at as usize];
-        if hit_box(node, ray.origin, inv_dir, t_min, t_max) {
-            let count = node.count_axis >> 2;
-            if count == 0 {
-                if ray.dir.get(node.count_axis) < R::ZERO {
+        let count = node.count_axis >> 2;
+        if count == 0 {
+            let left = box_interval(&nodes[at as usize + 1], ray.origin, inv_dir, t_min, t_max);
+            let right = box_interval(&nodes[node.first as usize], ray.origin, inv_dir, t_min, t_max);
+            let hit_left = left.0 <= left.1;
+            let hit_right = right.0 <= right.1;
+            if hit_left && hit_right {
+                if right.0 < left.0 {
                     stack[sp] = at + 1;
                     at = node.first;
                 } else {
@@ -613,6 +661,15 @@ pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, sk
                 sp += 1;
                 continue;
             }
+            if hit_left {
+                at += 1;
+                continue;
+            }
+            if hit_right {
+                at = node.first;
+                continue;
+            }
+        } else {
             for k in node.first..node.first + count {
                 let id = g.buf.prim_ids[k as usize];
                 if id != skip && hit_prim(g, ray, sh, id, t_min, t_max).0 < t_max {
