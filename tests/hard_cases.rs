@@ -194,6 +194,7 @@ fn closed_sphere_mesh_holds_every_ray() {
             .collect();
         for algo in TriangleAlgorithm::ALL {
             let (buf, spec) = geometry(vec![], tris.clone(), algo);
+            assert!(spec.use_bvh, "the closed mesh is traced through the BVH");
             let hits = query_both(&buf, spec, &rays, &format!("closed sphere {where_} {algo}"));
             let escaped = hits.iter().filter(|h| h.prim == PRIM_NONE).count();
             eprintln!(

@@ -582,7 +582,13 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
         if count == 0 {
             let bound = tie_bound(&best);
             let left = box_interval(&nodes[at as usize + 1], ray.origin, inv_dir, t_min, bound);
-            let right = box_interval(&nodes[node.first as usize], ray.origin, inv_dir, t_min, bound);
+            let right = box_interval(
+                &nodes[node.first as usize],
+                ray.origin,
+                inv_dir,
+                t_min,
+                bound,
+            );
             let hit_left = left.0 <= left.1;
             let hit_right = right.0 <= right.1;
             if hit_left && hit_right {
@@ -647,7 +653,13 @@ pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, sk
         let count = node.count_axis >> 2;
         if count == 0 {
             let left = box_interval(&nodes[at as usize + 1], ray.origin, inv_dir, t_min, t_max);
-            let right = box_interval(&nodes[node.first as usize], ray.origin, inv_dir, t_min, t_max);
+            let right = box_interval(
+                &nodes[node.first as usize],
+                ray.origin,
+                inv_dir,
+                t_min,
+                t_max,
+            );
             let hit_left = left.0 <= left.1;
             let hit_right = right.0 <= right.1;
             if hit_left && hit_right {
