@@ -623,13 +623,20 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
     return false;
 }
 
+/// t_max with +inf lowered to INFINITY (f32::MAX), the miss value of every intersection
+/// test: a miss must never be nearer than the bound. NaN stays NaN (nothing is hit).
+fn finite_bound(t_max: f32) -> f32 {
+    return select(t_max, INFINITY, t_max > INFINITY);
+}
+
 /// The nearest hit in (t_min, t_max); of hits at the same t, the lowest primitive id
 /// (spheres before triangles). `prim` is PRIM_NONE on a miss.
 fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
+    let t_hi = finite_bound(t_max);
     if USE_BVH {
-        return closest_hit_bvh(ray, t_min, t_max);
+        return closest_hit_bvh(ray, t_min, t_hi);
     }
-    return closest_hit_all(ray, t_min, t_max);
+    return closest_hit_all(ray, t_min, t_hi);
 }
 
 /// Whether anything but primitive `skip` lies on the ray in (t_min, t_max); stops at the
@@ -637,10 +644,11 @@ fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
 /// own where N·L > 0, so skipping the one that was hit loses no shadow and removes all
 /// self-shadowing, whatever the rounding of the hit point.
 fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+    let t_hi = finite_bound(t_max);
     if USE_BVH {
-        return occluded_bvh(ray, t_min, t_max, skip);
+        return occluded_bvh(ray, t_min, t_hi, skip);
     }
-    return occluded_all(ray, t_min, t_max, skip);
+    return occluded_all(ray, t_min, t_hi, skip);
 }
 
 // ---- shading -----------------------------------------------------------------------------

@@ -1,6 +1,9 @@
 //! The `glint` command line: `render`, `compare`, `bench`.
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -117,6 +120,48 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((p(w)?, p(h)?))
 }
 
+/// A one-line progress bar on stderr for renders that take longer than half a second,
+/// drawn only when stderr is a terminal (logs get no carriage returns).
+struct ProgressBar {
+    start: Instant,
+    shown: AtomicBool,
+    lock: Mutex<()>,
+}
+
+impl ProgressBar {
+    fn new(start: Instant) -> Self {
+        ProgressBar {
+            start,
+            shown: AtomicBool::new(false),
+            lock: Mutex::new(()),
+        }
+    }
+
+    fn show(&self, done: u32, total: u32) {
+        if !std::io::stderr().is_terminal() || self.start.elapsed().as_secs_f64() < 0.5 {
+            return;
+        }
+        let Ok(_guard) = self.lock.try_lock() else {
+            return;
+        };
+        let width = 40;
+        let filled = (done as u64 * width / total.max(1) as u64) as usize;
+        eprint!(
+            "\r[{}{}] {done}/{total} rows, {:.1} s",
+            "#".repeat(filled),
+            ".".repeat(width as usize - filled),
+            self.start.elapsed().as_secs_f64()
+        );
+        self.shown.store(true, Ordering::Relaxed);
+    }
+
+    fn finish(&self) {
+        if self.shown.load(Ordering::Relaxed) {
+            eprintln!();
+        }
+    }
+}
+
 fn load(scene: &Path) -> Result<Scene> {
     let s = Scene::load(scene)?;
     for w in &s.warnings {
@@ -155,8 +200,12 @@ fn run(cli: Cli) -> Result<()> {
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
             let t0 = Instant::now();
+            let bar = ProgressBar::new(t0);
             let (image, what) = match backend {
-                Backend::Cpu => (glint::cpu::render_f32(&buf, spec), "cpu (f32)".to_string()),
+                Backend::Cpu => (
+                    glint::cpu::render_f32_progress(&buf, spec, &|d, n| bar.show(d, n)),
+                    "cpu (f32)".to_string(),
+                ),
                 Backend::CpuF64 => (
                     glint::cpu::render_f64(&s, &buf, spec),
                     "cpu-f64".to_string(),
@@ -168,7 +217,7 @@ fn run(cli: Cli) -> Result<()> {
                             &gpu.queue,
                             &buf,
                             spec,
-                            &mut |_, _| {},
+                            &mut |d, n| bar.show(d, n),
                         )?;
                         let what = format!(
                             "gpu: {} (device {:.0} ms, compile {:.0} ms, trace {:.1} ms, readback {:.1} ms)",
@@ -188,12 +237,16 @@ fn run(cli: Cli) -> Result<()> {
                             "note: no Vulkan adapter, so the CPU tracer renders this \
                              (for the GPU tracer: apt-get install mesa-vulkan-drivers libvulkan1)"
                         );
-                        (glint::cpu::render_f32(&buf, spec), "cpu (f32)".to_string())
+                        (
+                            glint::cpu::render_f32_progress(&buf, spec, &|d, n| bar.show(d, n)),
+                            "cpu (f32)".to_string(),
+                        )
                     }
                     Err(e) => return Err(e.into()),
                 },
             };
             let dt = t0.elapsed();
+            bar.finish();
             image.save_png(&output)?;
             println!(
                 "{}: {}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",

@@ -4,6 +4,8 @@
 pub mod real;
 pub mod trace;
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use rayon::prelude::*;
 
 use crate::buffers::{HitOut, RayIn, SceneBuffers, Specialisation};
@@ -20,9 +22,13 @@ pub fn camera_basis<R: Real>(eye: V3<R>, look_at: V3<R>, up: V3<R>) -> [V3<R>; 3
     [forward, right, up2]
 }
 
-fn render_with<R: Real>(g: &Globals<R>) -> Image {
+/// Called with (rows done, rows in all) as rows finish, from any thread.
+pub type Progress<'a> = dyn Fn(u32, u32) + Sync + 'a;
+
+fn render_with<R: Real>(g: &Globals<R>, progress: &Progress<'_>) -> Image {
     let (w, h) = (g.cam.width, g.cam.height);
     let mut pixels = vec![[0.0f32; 4]; w as usize * h as usize];
+    let done = AtomicU32::new(0);
     pixels
         .par_chunks_mut(w as usize)
         .enumerate()
@@ -31,6 +37,7 @@ fn render_with<R: Real>(g: &Globals<R>) -> Image {
                 let c = trace::trace_pixel(g, i as u32, j as u32);
                 *px = c.map(|x| x.to_f32());
             }
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, h);
         });
     Image {
         width: w,
@@ -41,12 +48,21 @@ fn render_with<R: Real>(g: &Globals<R>) -> Image {
 
 /// Renders with the f32 mirror of `trace.wgsl`, specialised as the GPU would be.
 pub fn render_f32(buf: &SceneBuffers, spec: Specialisation) -> Image {
+    render_f32_progress(buf, spec, &|_, _| {})
+}
+
+/// [`render_f32`], reporting rows done to `progress`.
+pub fn render_f32_progress(
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    progress: &Progress<'_>,
+) -> Image {
     let g = Globals {
         cam: Camera::from_params(&buf.params),
         buf,
         spec,
     };
-    render_with(&g)
+    render_with(&g, progress)
 }
 
 /// Renders the f64 ground truth: the same algorithms with the camera basis, every
@@ -69,7 +85,7 @@ pub fn render_f64(scene: &Scene, buf: &SceneBuffers, spec: Specialisation) -> Im
         width: w,
         height: h,
     };
-    render_with(&Globals { cam, buf, spec })
+    render_with(&Globals { cam, buf, spec }, &|_, _| {})
 }
 
 /// The `query` entry point on the CPU, in f32 (the shader's twin) over many rays.

@@ -698,22 +698,29 @@ pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, sk
     false
 }
 
+/// WGSL `finite_bound`: +inf lowered to INFINITY, the intersection tests' miss value.
+pub fn finite_bound<R: Real>(t_max: R) -> R {
+    select(t_max, R::INFINITY, t_max > R::INFINITY)
+}
+
 /// WGSL `closest_hit`: the nearest hit in (t_min, t_max); of equal t, the lowest id.
 pub fn closest_hit<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
+    let t_hi = finite_bound(t_max);
     if g.spec.use_bvh {
-        return closest_hit_bvh(g, ray, t_min, t_max);
+        return closest_hit_bvh(g, ray, t_min, t_hi);
     }
-    closest_hit_all(g, ray, t_min, t_max)
+    closest_hit_all(g, ray, t_min, t_hi)
 }
 
 /// WGSL `occluded`: whether anything but primitive `skip` lies on the ray in (t_min,
 /// t_max). A convex primitive cannot shadow a point of its own where N·L > 0, so skipping
 /// the one that was hit loses no shadow.
 pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+    let t_hi = finite_bound(t_max);
     if g.spec.use_bvh {
-        return occluded_bvh(g, ray, t_min, t_max, skip);
+        return occluded_bvh(g, ray, t_min, t_hi, skip);
     }
-    occluded_all(g, ray, t_min, t_max, skip)
+    occluded_all(g, ray, t_min, t_hi, skip)
 }
 
 // ---- shading -----------------------------------------------------------------------------

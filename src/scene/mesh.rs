@@ -83,7 +83,7 @@ pub(super) fn load(
         mesh: obj_path.clone(),
         message,
     };
-    let bytes = read_mesh_bytes(&obj_path).map_err(&fail)?;
+    let bytes = read_mesh_bytes(v, &obj_path).map_err(&fail)?;
     if let Err(e) = std::str::from_utf8(&bytes) {
         let text = String::from_utf8_lossy(&bytes);
         return Err(fail(format!(
@@ -99,7 +99,8 @@ pub(super) fn load(
     };
     let obj_dir = obj_path.parent().unwrap_or(Path::new(".")).to_owned();
     let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(&bytes[..]), &opts, |p| {
-        tobj::load_mtl(obj_dir.join(p))
+        let mtl = (v.read)(&obj_dir.join(p)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        tobj::load_mtl_buf(&mut BufReader::new(&mtl[..]))
     })
     .map_err(|e| fail(format!("cannot parse OBJ: {e}")))?;
 
@@ -232,8 +233,8 @@ pub(super) fn load(
 }
 
 /// The bytes of an OBJ file, gunzipped when the name ends in `.gz`.
-fn read_mesh_bytes(path: &Path) -> Result<Vec<u8>, String> {
-    let raw = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+fn read_mesh_bytes(v: &Validator<'_>, path: &Path) -> Result<Vec<u8>, String> {
+    let raw = (v.read)(path)?;
     if path.extension().is_some_and(|e| e == "gz") {
         use std::io::Read;
         let mut out = Vec::new();

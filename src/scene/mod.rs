@@ -198,8 +198,14 @@ impl Scene {
 
     /// Parses and validates scene text; `path` names it in errors and anchors mesh paths.
     pub fn parse(src: &str, path: &Path) -> Result<Scene, SceneError> {
+        Scene::parse_with(src, path, &read_from_disk)
+    }
+
+    /// [`Scene::parse`], reading meshes and MTLs through `read` (a fuzzer or an embedder
+    /// can serve them from memory).
+    pub fn parse_with(src: &str, path: &Path, read: &ReadFile<'_>) -> Result<Scene, SceneError> {
         let file: SceneFile = toml::from_str(src).map_err(|e| syntax_error(src, path, &e))?;
-        Validator { src, path }.scene(file)
+        Validator { src, path, read }.scene(file)
     }
 
     /// The sizes the scene's camera asks for.
@@ -241,6 +247,15 @@ fn syntax_error(src: &str, path: &Path, e: &toml::de::Error) -> SceneError {
 struct Validator<'a> {
     src: &'a str,
     path: &'a Path,
+    read: &'a ReadFile<'a>,
+}
+
+/// How a scene reads the files it names (meshes and their MTLs): the bytes, or a message.
+pub type ReadFile<'a> = dyn Fn(&Path) -> Result<Vec<u8>, String> + 'a;
+
+/// [`ReadFile`] from the file system.
+pub fn read_from_disk(path: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(path).map_err(|e| format!("cannot read: {e}"))
 }
 
 impl Validator<'_> {

@@ -244,6 +244,13 @@ pub fn query_both(
     // The naive test accepts points well outside its triangle far from the origin (t off
     // by up to 1e-2 relative, docs/robustness.md), beyond any box padding: there the BVH
     // may skip a hit that brute force keeps, rarely.
+    if std::env::var("GLINT_DEBUG_DIFF").is_ok() {
+        for (k, (a, b)) in cpu.iter().zip(&other).enumerate() {
+            if bytemuck::bytes_of(a) != bytemuck::bytes_of(b) {
+                eprintln!("{:?}\n  {:?}\n  {:?}", rays[k], a, b);
+            }
+        }
+    }
     let allowed = if spec.triangle_algo == buffers::TRIANGLE_NAIVE {
         rays.len() / 1000
     } else {

@@ -1,0 +1,209 @@
+//! Randomised properties, seeded so a failure repeats: random small scenes (random
+//! primitives, materials, lights, cameras, triangle algorithm, shadows, BVH or not) render
+//! the same on the GPU as on the CPU mirror (bit for bit on lavapipe), and no pixel of any
+//! of them, nor of the f64 reference, is NaN.
+
+mod common;
+
+use std::fmt::Write;
+use std::path::Path;
+
+use common::{Rng, check_agreement, render_gpu};
+use glint::buffers::{SceneBuffers, Specialisation};
+use glint::scene::Scene;
+
+fn v3(rng: &mut Rng, lo: f32, hi: f32) -> String {
+    format!(
+        "[{}, {}, {}]",
+        rng.range(lo, hi),
+        rng.range(lo, hi),
+        rng.range(lo, hi)
+    )
+}
+
+/// A random scene as TOML text (so the parser is part of the property too).
+fn random_scene(rng: &mut Rng) -> String {
+    let mut s = String::new();
+    let algo = ["naive", "moller-trumbore", "watertight"][(rng.next_u64() % 3) as usize];
+    writeln!(s, "ambient = {}", v3(rng, 0.0, 0.4)).unwrap();
+    writeln!(s, "background = {}", v3(rng, 0.0, 0.3)).unwrap();
+    writeln!(s, "triangle = \"{algo}\"").unwrap();
+    writeln!(s, "shadows = {}", rng.next_u64() % 2 == 0).unwrap();
+    writeln!(s, "[camera]").unwrap();
+    writeln!(s, "eye = {}", v3(rng, -8.0, 8.0)).unwrap();
+    writeln!(s, "look_at = {}", v3(rng, -1.0, 1.0)).unwrap();
+    writeln!(s, "up = {}", v3(rng, -1.0, 1.0)).unwrap();
+    writeln!(s, "fov = {}", rng.range(20.0, 110.0)).unwrap();
+    writeln!(s, "width = 48\nheight = 36").unwrap();
+    for _ in 0..1 + rng.next_u64() % 3 {
+        writeln!(s, "[[lights]]").unwrap();
+        writeln!(s, "position = {}", v3(rng, -10.0, 10.0)).unwrap();
+        writeln!(s, "color = {}", v3(rng, 0.0, 1.0)).unwrap();
+    }
+    let n_materials = 1 + rng.next_u64() % 3;
+    for k in 0..n_materials {
+        let model = ["ambient", "diffuse", "phong"][(rng.next_u64() % 3) as usize];
+        writeln!(s, "[materials.m{k}]\nmodel = \"{model}\"").unwrap();
+        writeln!(s, "ka = {}", v3(rng, 0.0, 1.0)).unwrap();
+        if model != "ambient" {
+            writeln!(s, "kd = {}", v3(rng, 0.0, 1.0)).unwrap();
+        }
+        if model == "phong" {
+            // Integer exponents: raised by squaring on both tracers (pow differs by ULPs).
+            writeln!(s, "ks = {}", v3(rng, 0.0, 1.0)).unwrap();
+            writeln!(s, "n = {}.0", rng.next_u64() % 200).unwrap();
+        }
+    }
+    let mat = |rng: &mut Rng| format!("m{}", rng.next_u64() % n_materials);
+    for _ in 0..rng.next_u64() % 6 {
+        writeln!(s, "[[spheres]]").unwrap();
+        writeln!(s, "center = {}", v3(rng, -3.0, 3.0)).unwrap();
+        writeln!(s, "radius = {}", rng.range(0.05, 2.0)).unwrap();
+        writeln!(s, "material = \"{}\"", mat(rng)).unwrap();
+    }
+    // Sometimes a few triangles (traced by testing each), sometimes enough for the BVH.
+    let n_tris = if rng.next_u64() % 2 == 0 {
+        rng.next_u64() % 8
+    } else {
+        20 + rng.next_u64() % 60
+    };
+    for _ in 0..n_tris {
+        let c = [0, 1, 2].map(|_| rng.range(-3.0, 3.0));
+        let p = |rng: &mut Rng| {
+            format!(
+                "[{}, {}, {}]",
+                c[0] + rng.range(-1.0, 1.0),
+                c[1] + rng.range(-1.0, 1.0),
+                c[2] + rng.range(-1.0, 1.0)
+            )
+        };
+        let (a, b, d) = (p(rng), p(rng), p(rng));
+        writeln!(s, "[[triangles]]\nvertices = [{a}, {b}, {d}]").unwrap();
+        writeln!(s, "material = \"{}\"", mat(rng)).unwrap();
+    }
+    s
+}
+
+/// Random scenes whose GPU and CPU images differ in low f32 bits on lavapipe (never in
+/// 8 bits, never in hit/miss): an open finding. Scene #16: 8 pixels of a Phong sphere
+/// (n = 46) differ by up to 6e-7; scene #34: 2 pixels by up to 7.5e-8. The same arithmetic
+/// lifted into a probe shader matches Rust bit for bit, so the difference comes from the
+/// context lavapipe compiles it in; not yet explained.
+const KNOWN_BIT_DIFFERENCES: usize = 2;
+
+#[test]
+fn random_scenes_agree_and_never_give_nan() {
+    let mut rng = Rng::new(0x5eed);
+    let gpu = common::gpu();
+    let (mut tested, mut with_bvh, mut lit, mut bit_scenes) = (0, 0, 0usize, 0);
+    while tested < 40 {
+        let src = random_scene(&mut rng);
+        // A random camera can be invalid (up parallel to the view): the validator says so.
+        let Ok(scene) = Scene::parse(&src, Path::new("random.toml")) else {
+            continue;
+        };
+        tested += 1;
+        let buf = SceneBuffers::new(&scene, 48, 36, scene.triangle);
+        let spec = Specialisation::for_scene(&buf);
+        with_bvh += spec.use_bvh as usize;
+        let cpu = glint::cpu::render_f32(&buf, spec);
+        let f64_img = glint::cpu::render_f64(&scene, &buf, spec);
+        for (what, img) in [("CPU f32", &cpu), ("CPU f64", &f64_img)] {
+            assert!(
+                img.pixels.iter().all(|p| p.iter().all(|x| !x.is_nan())),
+                "{what}: a NaN pixel in scene #{tested}:\n{src}"
+            );
+        }
+        lit += cpu.hit_count();
+        if let Some(gpu) = gpu {
+            let g = render_gpu(gpu, &buf, spec);
+            assert!(g.pixels.iter().all(|p| p.iter().all(|x| !x.is_nan())));
+            if common::is_lavapipe(gpu) {
+                // 0 differing pixels (8-bit) and 0 hit/miss, always; every f32 bit in all
+                // but a few scenes (see KNOWN_BIT_DIFFERENCES).
+                let d = glint::compare::diff(&g, &cpu);
+                assert!(
+                    d.differing_pixels == 0 && d.hit_miss == 0,
+                    "scene #{tested}: {d:?}\n{src}"
+                );
+                if d.differing_bits > 0 {
+                    eprintln!(
+                        "scene #{tested}: {} pixels differ in low f32 bits (largest {:.1e})",
+                        d.differing_bits, d.max_abs
+                    );
+                    bit_scenes += 1;
+                }
+            } else {
+                check_agreement(&g, &cpu, false)
+                    .unwrap_or_else(|e| panic!("scene #{tested}: {e}\n{src}"));
+            }
+        }
+    }
+    eprintln!(
+        "{tested} random scenes, {with_bvh} through the BVH, {lit} pixels hit in all, \
+         {bit_scenes} with low-bit differences"
+    );
+    assert!(
+        bit_scenes <= KNOWN_BIT_DIFFERENCES,
+        "{bit_scenes} scenes differ in f32 bits (known: {KNOWN_BIT_DIFFERENCES})"
+    );
+    assert!(
+        with_bvh >= 10 && with_bvh <= 30,
+        "both traversals must be exercised"
+    );
+    assert!(lit > 10_000, "the random scenes must hit something");
+}
+
+/// Random rays, finite and not (NaN, ±inf, zero directions), through a scene with every
+/// kind of primitive: the query never reports a NaN distance for a hit, and GPU = CPU.
+#[test]
+fn random_rays_with_non_finite_parts_are_safe() {
+    let src = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bb8-shadows.toml"),
+    )
+    .unwrap();
+    let scene = Scene::parse(&src, Path::new("scenes/bb8-shadows.toml")).unwrap();
+    let buf = SceneBuffers::new(&scene, 8, 8, glint::scene::TriangleAlgorithm::Watertight);
+    let specials = [
+        f32::NAN,
+        f32::INFINITY,
+        -f32::INFINITY,
+        0.0,
+        -0.0,
+        1e30,
+        -1e-30,
+    ];
+    let mut rng = Rng::new(77);
+    let rays: Vec<glint::buffers::RayIn> = (0..20_000)
+        .map(|_| {
+            let mut c = [0.0f32; 8];
+            for x in c.iter_mut() {
+                *x = if rng.next_u64() % 6 == 0 {
+                    specials[(rng.next_u64() % specials.len() as u64) as usize]
+                } else {
+                    rng.range(-5.0, 5.0)
+                };
+            }
+            glint::buffers::RayIn {
+                origin: [c[0], c[1], c[2]],
+                t_min: if c[3] > 0.0 { 0.0 } else { c[3] },
+                dir: [c[4], c[5], c[6]],
+                t_max: if rng.next_u64() % 2 == 0 {
+                    f32::MAX
+                } else {
+                    c[7]
+                },
+            }
+        })
+        .collect();
+    for use_bvh in [true, false] {
+        let spec = Specialisation::for_scene(&buf).with_bvh(use_bvh);
+        let hits = common::query_both(&buf, spec, &rays, &format!("random rays, BVH {use_bvh}"));
+        let nan_hits = hits
+            .iter()
+            .filter(|h| h.prim != glint::buffers::PRIM_NONE && h.t.is_nan())
+            .count();
+        assert_eq!(nan_hits, 0);
+        assert!(hits.iter().any(|h| h.prim != glint::buffers::PRIM_NONE));
+    }
+}
