@@ -28,7 +28,7 @@ fn random_scene(rng: &mut Rng) -> String {
     writeln!(s, "ambient = {}", v3(rng, 0.0, 0.4)).unwrap();
     writeln!(s, "background = {}", v3(rng, 0.0, 0.3)).unwrap();
     writeln!(s, "triangle = \"{algo}\"").unwrap();
-    writeln!(s, "shadows = {}", rng.next_u64() % 2 == 0).unwrap();
+    writeln!(s, "shadows = {}", rng.next_u64().is_multiple_of(2)).unwrap();
     writeln!(s, "[camera]").unwrap();
     writeln!(s, "eye = {}", v3(rng, -8.0, 8.0)).unwrap();
     writeln!(s, "look_at = {}", v3(rng, -1.0, 1.0)).unwrap();
@@ -62,7 +62,7 @@ fn random_scene(rng: &mut Rng) -> String {
         writeln!(s, "material = \"{}\"", mat(rng)).unwrap();
     }
     // Sometimes a few triangles (traced by testing each), sometimes enough for the BVH.
-    let n_tris = if rng.next_u64() % 2 == 0 {
+    let n_tris = if rng.next_u64().is_multiple_of(2) {
         rng.next_u64() % 8
     } else {
         20 + rng.next_u64() % 60
@@ -178,7 +178,7 @@ fn random_rays_with_non_finite_parts_are_safe() {
         .map(|_| {
             let mut c = [0.0f32; 8];
             for x in c.iter_mut() {
-                *x = if rng.next_u64() % 6 == 0 {
+                *x = if rng.next_u64().is_multiple_of(6) {
                     specials[(rng.next_u64() % specials.len() as u64) as usize]
                 } else {
                     rng.range(-5.0, 5.0)
@@ -188,7 +188,7 @@ fn random_rays_with_non_finite_parts_are_safe() {
                 origin: [c[0], c[1], c[2]],
                 t_min: if c[3] > 0.0 { 0.0 } else { c[3] },
                 dir: [c[4], c[5], c[6]],
-                t_max: if rng.next_u64() % 2 == 0 {
+                t_max: if rng.next_u64().is_multiple_of(2) {
                     f32::MAX
                 } else {
                     c[7]
