@@ -148,7 +148,7 @@ fn random_scenes_agree_and_never_give_nan() {
         "{bit_scenes} scenes differ in f32 bits (known: {KNOWN_BIT_DIFFERENCES})"
     );
     assert!(
-        with_bvh >= 10 && with_bvh <= 30,
+        (10..=30).contains(&with_bvh),
         "both traversals must be exercised"
     );
     assert!(lit > 10_000, "the random scenes must hit something");
