@@ -6,7 +6,7 @@ mod kernel;
 
 use std::time::{Duration, Instant};
 
-pub use kernel::{GpuTimings, Kernel};
+pub use kernel::{GpuTimings, Kernel, tile_rows};
 
 /// The WGSL source of the kernel.
 pub const SHADER_SOURCE: &str = include_str!("../../shaders/trace.wgsl");
