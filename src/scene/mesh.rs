@@ -98,11 +98,22 @@ pub(super) fn load(
         ignore_lines: true,
     };
     let obj_dir = obj_path.parent().unwrap_or(Path::new(".")).to_owned();
+    let mtl_problem = std::cell::RefCell::new(None::<String>);
     let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(&bytes[..]), &opts, |p| {
         let mtl = (v.read)(&obj_dir.join(p)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        if let Some(line) = short_colour_line(&mtl) {
+            *mtl_problem.borrow_mut() = Some(format!(
+                "{}: line {line}: a colour (Ka, Kd, Ks, Ke) needs three numbers",
+                p.display()
+            ));
+            return Err(tobj::LoadError::MaterialParseError);
+        }
         tobj::load_mtl_buf(&mut BufReader::new(&mtl[..]))
     })
-    .map_err(|e| fail(format!("cannot parse OBJ: {e}")))?;
+    .map_err(|e| match mtl_problem.borrow_mut().take() {
+        Some(m) => fail(m),
+        None => fail(format!("cannot parse OBJ: {e}")),
+    })?;
 
     let named = match &m.material {
         Some(name) => {
@@ -113,10 +124,17 @@ pub(super) fn load(
     };
     // The MTL's materials, appended once, in file order.
     let mtl_base = materials.len() as u32;
-    let mtl = if named.is_none() {
-        mtl.unwrap_or_default()
-    } else {
-        Vec::new()
+    let mtl = match (named, mtl) {
+        (Some(_), _) => Vec::new(),
+        (None, Ok(m)) => m,
+        (None, Err(e)) => {
+            return Err(fail(
+                mtl_problem
+                    .borrow_mut()
+                    .take()
+                    .unwrap_or_else(|| format!("cannot load its MTL: {e}")),
+            ));
+        }
     };
     for (k, mm) in mtl.iter().enumerate() {
         let ka = mm.ambient.unwrap_or([0.0; 3]);
@@ -230,6 +248,18 @@ pub(super) fn load(
         ));
     }
     Ok(())
+}
+
+/// The first line (1-based) of an MTL whose Ka, Kd, Ks or Ke has fewer than three
+/// values: tobj 4 panics on those, so they are refused before it sees them.
+fn short_colour_line(mtl: &[u8]) -> Option<usize> {
+    let text = String::from_utf8_lossy(mtl);
+    text.lines()
+        .position(|l| {
+            let mut words = l.split_whitespace();
+            matches!(words.next(), Some("Ka" | "Kd" | "Ks" | "Ke")) && words.count() < 3
+        })
+        .map(|k| k + 1)
 }
 
 /// The bytes of an OBJ file, gunzipped when the name ends in `.gz`.
