@@ -43,9 +43,7 @@ const TRIANGLE_BIT: u32 = 0x80000000u;
 const INFINITY: f32 = 3.40282347e38; // f32::MAX: a t that every real hit beats
 const SHADOW_EPSILON: f32 = 1.1920929e-7; // see buffers::SHADOW_EPSILON
 const SPLITTER: f32 = 4097.0; // 2^12 + 1, Veltkamp's split for f32
-const BVH_STACK: u32 = 72u; // bvh::STACK: three pushes a level of a tree at most 24 deep
-const NODE_NONE: u32 = 0xffffffffu; // descend: no node left to visit
-const EMPTY_SLOT: u32 = 0xffffffffu; // BvhNode.count of a slot with no child
+const BVH_STACK: u32 = 48u; // bvh::MAX_DEPTH: the builder never makes a deeper tree
 const BOX_SLACK: f32 = 4.76837158e-7; // 4 ε ≥ 2γ(3): pbrt's conservative slab test
 
 // ---- shared structs (Rust: src/buffers.rs) --------------------------------------------
@@ -92,14 +90,10 @@ struct Triangle {
 }
 
 struct BvhNode {
-    lo_x: vec4<f32>,
-    lo_y: vec4<f32>,
-    lo_z: vec4<f32>,
-    hi_x: vec4<f32>,
-    hi_y: vec4<f32>,
-    hi_z: vec4<f32>,
-    child: vec4<u32>,
-    count: vec4<u32>,
+    lo: vec3<f32>,
+    first: u32,
+    hi: vec3<f32>,
+    count_axis: u32,
 }
 
 struct Material {
@@ -469,94 +463,27 @@ fn hit_prim(ray: Ray, sh: Shear, id: u32, t_min: f32, t_max: f32) -> vec3<f32> {
     return vec3<f32>(INFINITY, 0.0, 0.0);
 }
 
-/// Per lane, the part (t0, t1) of the ray's interval still inside a box.
-struct Span {
-    t0: vec4<f32>,
-    t1: vec4<f32>,
-}
-
-/// `s` clipped, lane by lane, to the slab between planes `lo` and `hi` of one axis, the
-/// exit widened by 2γ(3) of itself (pbrt), so rounding never loses a box that the exact
-/// ray enters. A NaN slab (a zero direction component at a slab's plane) constrains
-/// nothing. No min/max: their NaN rules differ between targets.
-fn clip_slab(s: Span, lo: vec4<f32>, hi: vec4<f32>, o: f32, inv: f32) -> Span {
-    let t_lo = (lo - o) * inv;
-    let t_hi = (hi - o) * inv;
+/// The part (t0, t1) of the ray's interval (t_min, t_max) inside the node's box; the box
+/// is hit when t0 <= t1. The slab test, each exit distance widened by 2γ(3) of itself
+/// (pbrt), so rounding never loses a box that the exact ray enters. NaN slabs (a zero
+/// direction component at a slab's plane) constrain nothing. `inv_dir` is 1 / dir per
+/// component (±inf for a zero component).
+fn box_interval(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_min: f32, t_max: f32) -> vec2<f32> {
+    let t_lo = (node.lo - origin) * inv_dir;
+    let t_hi = (node.hi - origin) * inv_dir;
     let swap = t_hi < t_lo;
     let near = select(t_lo, t_hi, swap);
     var far = select(t_hi, t_lo, swap);
     far = far + abs(far) * BOX_SLACK;
-    return Span(select(s.t0, near, near > s.t0), select(s.t1, far, far < s.t1));
-}
-
-/// Which of a node's four children the ray enters, and where.
-struct Slots {
-    t0: vec4<f32>,
-    hit: vec4<bool>,
-}
-
-/// The conservative slab test of all four child boxes of `node` within (t_min, t_max);
-/// empty slots are never hit. `inv_dir` is 1 / dir per component (±inf for a zero
-/// component).
-fn box_slots(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_min: f32, t_max: f32) -> Slots {
-    var s = Span(vec4<f32>(t_min), vec4<f32>(t_max));
-    s = clip_slab(s, node.lo_x, node.hi_x, origin.x, inv_dir.x);
-    s = clip_slab(s, node.lo_y, node.hi_y, origin.y, inv_dir.y);
-    s = clip_slab(s, node.lo_z, node.hi_z, origin.z, inv_dir.z);
-    return Slots(s.t0, (s.t0 <= s.t1) & (node.count != vec4<u32>(EMPTY_SLOT)));
-}
-
-/// Compare-exchange of lanes a < b of a sorting network: wanted lanes before unwanted
-/// ones, and of wanted lanes the nearer first.
-fn order(key: ptr<function, array<f32, 4>>, id: ptr<function, array<u32, 4>>, want: ptr<function, array<bool, 4>>, a: u32, b: u32) {
-    if (*want)[b] && (!(*want)[a] || (*key)[b] < (*key)[a]) {
-        let k = (*key)[a];
-        (*key)[a] = (*key)[b];
-        (*key)[b] = k;
-        let i = (*id)[a];
-        (*id)[a] = (*id)[b];
-        (*id)[b] = i;
-        let w = (*want)[a];
-        (*want)[a] = (*want)[b];
-        (*want)[b] = w;
-    }
-}
-
-/// The next node to visit once a node's leaves are done. Its interior children that the
-/// ray enters no farther than `bound` are sorted nearest first; the nearest is returned and
-/// the others pushed, farthest first. With none, the top of the stack is popped;
-/// NODE_NONE when it is empty.
-fn descend(node: BvhNode, s: Slots, bound: f32, stack: ptr<function, array<u32, BVH_STACK>>, sp: ptr<function, u32>) -> u32 {
-    var key = array<f32, 4>(s.t0.x, s.t0.y, s.t0.z, s.t0.w);
-    var id = array<u32, 4>(node.child.x, node.child.y, node.child.z, node.child.w);
-    let w = s.hit & (node.count == vec4<u32>(0u)) & (s.t0 <= vec4<f32>(bound));
-    var want = array<bool, 4>(w.x, w.y, w.z, w.w);
-    let n = select(0u, 1u, w.x) + select(0u, 1u, w.y) + select(0u, 1u, w.z) + select(0u, 1u, w.w);
-    order(&key, &id, &want, 0u, 1u);
-    order(&key, &id, &want, 2u, 3u);
-    order(&key, &id, &want, 0u, 2u);
-    order(&key, &id, &want, 1u, 3u);
-    order(&key, &id, &want, 1u, 2u);
-    if n > 3u {
-        (*stack)[*sp] = id[3];
-        *sp = *sp + 1u;
-    }
-    if n > 2u {
-        (*stack)[*sp] = id[2];
-        *sp = *sp + 1u;
-    }
-    if n > 1u {
-        (*stack)[*sp] = id[1];
-        *sp = *sp + 1u;
-    }
-    if n > 0u {
-        return id[0];
-    }
-    if *sp == 0u {
-        return NODE_NONE;
-    }
-    *sp = *sp - 1u;
-    return (*stack)[*sp];
+    var t0 = t_min;
+    var t1 = t_max;
+    t0 = select(t0, near.x, near.x > t0);
+    t0 = select(t0, near.y, near.y > t0);
+    t0 = select(t0, near.z, near.z > t0);
+    t1 = select(t1, far.x, far.x < t1);
+    t1 = select(t1, far.y, far.y < t1);
+    t1 = select(t1, far.z, far.z < t1);
+    return vec2<f32>(t0, t1);
 }
 
 /// The bound to test against when `best` is the nearest hit so far: one ULP past best.t,
@@ -574,63 +501,124 @@ fn nearer(t: f32, id: u32, best: Hit) -> bool {
     return t < best.t || (t == best.t && id < best.prim && best.prim != PRIM_NONE);
 }
 
-/// `closest_hit` through the wide BVH, depth first: at each node all four boxes are
-/// tested, the hit leaves searched in slot order, then `descend`. A fixed stack (the
-/// builder bounds the depth) and at most one step per node, so a NaN ray cannot loop.
-/// Same result as `closest_hit_all`.
+/// `closest_hit` through the BVH, depth first: at an interior node both children's boxes
+/// are tested, the nearer entered first and the other pushed. A fixed stack (the builder
+/// bounds the depth) and at most one step per node, so a NaN ray cannot loop. Same result
+/// as `closest_hit_all`.
 fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
+    let sh = ray_shear(ray.dir);
+    let inv_dir = 1.0 / ray.dir;
     if params.n_nodes == 0u {
         return best;
     }
-    let sh = ray_shear(ray.dir);
-    let inv_dir = 1.0 / ray.dir;
+    let root = box_interval(nodes[0], ray.origin, inv_dir, t_min, t_max);
+    if !(root.x <= root.y) {
+        return best;
+    }
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
     var at = 0u;
-    for (var step = 0u; step < params.n_nodes && at != NODE_NONE; step = step + 1u) {
+    for (var step = 0u; step < params.n_nodes; step = step + 1u) {
         let node = nodes[at];
-        let s = box_slots(node, ray.origin, inv_dir, t_min, tie_bound(best));
-        for (var k = 0u; k < 4u; k = k + 1u) {
-            if s.hit[k] && node.count[k] != 0u {
-                for (var p = node.child[k]; p < node.child[k] + node.count[k]; p = p + 1u) {
-                    let id = prim_ids[p];
-                    let h = hit_prim(ray, sh, id, t_min, tie_bound(best));
-                    if nearer(h.x, id, best) {
-                        best = Hit(h.x, id, h.y, h.z);
-                    }
+        let count = node.count_axis >> 2u;
+        if count == 0u {
+            let bound = tie_bound(best);
+            let left = box_interval(nodes[at + 1u], ray.origin, inv_dir, t_min, bound);
+            let right = box_interval(nodes[node.first], ray.origin, inv_dir, t_min, bound);
+            let hit_left = left.x <= left.y;
+            let hit_right = right.x <= right.y;
+            if hit_left && hit_right {
+                if right.x < left.x {
+                    stack[sp] = at + 1u;
+                    at = node.first;
+                } else {
+                    stack[sp] = node.first;
+                    at = at + 1u;
+                }
+                sp = sp + 1u;
+                continue;
+            }
+            if hit_left {
+                at = at + 1u;
+                continue;
+            }
+            if hit_right {
+                at = node.first;
+                continue;
+            }
+        } else {
+            for (var k = node.first; k < node.first + count; k = k + 1u) {
+                let id = prim_ids[k];
+                let h = hit_prim(ray, sh, id, t_min, tie_bound(best));
+                if nearer(h.x, id, best) {
+                    best = Hit(h.x, id, h.y, h.z);
                 }
             }
         }
-        at = descend(node, s, tie_bound(best), &stack, &sp);
+        if sp == 0u {
+            break;
+        }
+        sp = sp - 1u;
+        at = stack[sp];
     }
     return best;
 }
 
 /// `occluded` through the BVH, in `closest_hit_bvh`'s order; stops at the first hit.
 fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+    let sh = ray_shear(ray.dir);
+    let inv_dir = 1.0 / ray.dir;
     if params.n_nodes == 0u {
         return false;
     }
-    let sh = ray_shear(ray.dir);
-    let inv_dir = 1.0 / ray.dir;
+    let root = box_interval(nodes[0], ray.origin, inv_dir, t_min, t_max);
+    if !(root.x <= root.y) {
+        return false;
+    }
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
     var at = 0u;
-    for (var step = 0u; step < params.n_nodes && at != NODE_NONE; step = step + 1u) {
+    for (var step = 0u; step < params.n_nodes; step = step + 1u) {
         let node = nodes[at];
-        let s = box_slots(node, ray.origin, inv_dir, t_min, t_max);
-        for (var k = 0u; k < 4u; k = k + 1u) {
-            if s.hit[k] && node.count[k] != 0u {
-                for (var p = node.child[k]; p < node.child[k] + node.count[k]; p = p + 1u) {
-                    let id = prim_ids[p];
-                    if id != skip && hit_prim(ray, sh, id, t_min, t_max).x < t_max {
-                        return true;
-                    }
+        let count = node.count_axis >> 2u;
+        if count == 0u {
+            let left = box_interval(nodes[at + 1u], ray.origin, inv_dir, t_min, t_max);
+            let right = box_interval(nodes[node.first], ray.origin, inv_dir, t_min, t_max);
+            let hit_left = left.x <= left.y;
+            let hit_right = right.x <= right.y;
+            if hit_left && hit_right {
+                if right.x < left.x {
+                    stack[sp] = at + 1u;
+                    at = node.first;
+                } else {
+                    stack[sp] = node.first;
+                    at = at + 1u;
+                }
+                sp = sp + 1u;
+                continue;
+            }
+            if hit_left {
+                at = at + 1u;
+                continue;
+            }
+            if hit_right {
+                at = node.first;
+                continue;
+            }
+        } else {
+            for (var k = node.first; k < node.first + count; k = k + 1u) {
+                let id = prim_ids[k];
+                if id != skip && hit_prim(ray, sh, id, t_min, t_max).x < t_max {
+                    return true;
                 }
             }
         }
-        at = descend(node, s, t_max, &stack, &sp);
+        if sp == 0u {
+            break;
+        }
+        sp = sp - 1u;
+        at = stack[sp];
     }
     return false;
 }

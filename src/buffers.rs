@@ -128,34 +128,22 @@ pub struct Triangle {
     pub _pad1: u32,
 }
 
-/// A node of the flattened four-wide BVH (see [`crate::bvh`]): the boxes of up to four
-/// children, one lane each, so that one node's boxes are tested as four lanes at once.
-/// Must match WGSL `struct BvhNode` (128 bytes).
+/// A node of the flattened BVH (see [`crate::bvh`]). Must match WGSL `struct BvhNode`
+/// (32 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
-    /// Lower x of each child's box. Offset 0.
-    pub lo_x: [f32; 4],
-    /// Lower y of each child's box. Offset 16.
-    pub lo_y: [f32; 4],
-    /// Lower z of each child's box. Offset 32.
-    pub lo_z: [f32; 4],
-    /// Upper x of each child's box. Offset 48.
-    pub hi_x: [f32; 4],
-    /// Upper y of each child's box. Offset 64.
-    pub hi_y: [f32; 4],
-    /// Upper z of each child's box. Offset 80.
-    pub hi_z: [f32; 4],
-    /// Each child: an interior child's node index, or a leaf's first index in
-    /// `prim_ids`. Offset 96.
-    pub child: [u32; 4],
-    /// Each child: 0 for an interior node, the number of primitives for a leaf,
-    /// [`EMPTY_SLOT`] where the node has no such child. Offset 112.
-    pub count: [u32; 4],
+    /// Lower corner of the box. Offset 0.
+    pub lo: [f32; 3],
+    /// Interior: index of the second child (the first is the next node). Leaf: index of
+    /// the first primitive id in `prim_ids`. Offset 12.
+    pub first: u32,
+    /// Upper corner of the box. Offset 16.
+    pub hi: [f32; 3],
+    /// `count << 2 | axis`: a leaf has count > 0 (and axis 0); an interior node has
+    /// count 0 and its split axis, which orders the visit. Offset 28.
+    pub count_axis: u32,
 }
-
-/// `BvhNode::count` of a slot with no child: no ray enters it. Must match WGSL `EMPTY_SLOT`.
-pub const EMPTY_SLOT: u32 = 0xffff_ffff;
 
 /// A material. Must match WGSL `struct Material` (48 bytes).
 #[repr(C)]

@@ -1,37 +1,25 @@
 //! The bounding volume hierarchy: one tree over every sphere and triangle, built on the CPU
-//! as a binary tree with a binned surface-area heuristic (subtrees in parallel), then
-//! collapsed into a four-wide tree and flattened depth-first into one node buffer that
-//! `shaders/trace.wgsl` and `src/cpu/trace.rs` traverse alike.
+//! with a binned surface-area heuristic (subtrees in parallel), flattened depth-first into
+//! one node buffer that `shaders/trace.wgsl` and `src/cpu/trace.rs` traverse alike.
 //!
-//! Layout: a [`BvhNode`] holds up to four children's boxes, one lane each (the traversal
-//! tests them as one four-lane slab test). Slot `k` is an interior child (`count[k] == 0`,
-//! node `child[k]`), a leaf (primitives `prim_ids[child[k] .. child[k] + count[k]]`, each a
-//! sphere index or a triangle index with `TRIANGLE_BIT` set: the ids of `Hit::prim`, so the
-//! BVH never renumbers a primitive), or empty (`count[k] == EMPTY_SLOT`). Node 0 is the
-//! root. The build is deterministic: the same scene gives the same buffer, whatever the
-//! number of threads.
-//!
-//! Collapsing: a wide node takes its binary node's children, replacing each interior one by
-//! its two children; a node left with three slots splits its largest interior slot once
-//! more. So every interior slot is at least two binary levels down, the wide tree is at
-//! most `MAX_DEPTH / 2` deep, and the traversal stack (three pushes a level) holds
-//! [`STACK`] entries.
+//! Layout: node `k`'s first child is `k + 1`, its second child is `first`; a leaf's
+//! primitives are `prim_ids[first .. first + count]`, each a sphere index or a triangle
+//! index with `TRIANGLE_BIT` set (the ids of `Hit::prim`, so the BVH never renumbers a
+//! primitive). The build is deterministic: the same scene gives the same buffer, whatever
+//! the number of threads.
 //!
 //! Boxes are conservative: each primitive's box is widened by a relative 2^-18 of its
 //! size and position before the tree is built, so the rounding of a sphere's bound and a
 //! triangle test that accepts a ray a few ULP outside its triangle still find the box.
 
-use crate::buffers::{BvhNode, EMPTY_SLOT, Sphere, TRIANGLE_BIT, Triangle};
+use crate::buffers::{BvhNode, Sphere, TRIANGLE_BIT, Triangle};
 
 /// Number of centroid bins per axis in the SAH sweep.
 const BINS: usize = 16;
 /// Most primitives a leaf is made with when the SAH prefers a leaf.
 const MAX_LEAF: usize = 4;
-/// Deepest a node of the binary tree may be (the root is depth 0).
+/// Deepest a node may be; the traversal stack (`BVH_STACK` in WGSL) holds this many.
 pub const MAX_DEPTH: usize = 48;
-/// Entries of the traversal stack (`BVH_STACK` in WGSL): at most three pushes at each
-/// level of the wide tree, which is at most `MAX_DEPTH / 2` levels deep.
-pub const STACK: usize = 3 * MAX_DEPTH / 2;
 /// Below this many primitives a subtree is built on the current thread.
 const PARALLEL_MIN: usize = 8192;
 /// Relative widening of each primitive's box (see the module docs).
@@ -40,12 +28,11 @@ const PAD: f32 = 1.0 / 262_144.0;
 /// The flattened tree: what the shader's `nodes` and `prim_ids` bindings hold.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Bvh {
-    /// Four-wide nodes, depth-first; node 0 is the root. Empty when the scene has no
-    /// primitives.
+    /// Nodes, depth-first; node 0 is the root. Empty when the scene has no primitives.
     pub nodes: Vec<BvhNode>,
     /// Primitive ids in leaf order.
     pub prim_ids: Vec<u32>,
-    /// Depth of the deepest wide node (the root is depth 0); `3 * depth <= STACK`.
+    /// Depth of the deepest leaf (the root is depth 0).
     pub depth: usize,
 }
 
@@ -93,16 +80,9 @@ enum Node {
     },
     Interior {
         bounds: Aabb,
+        axis: u32,
         children: Box<(Node, Node)>,
     },
-}
-
-impl Node {
-    fn bounds(&self) -> &Aabb {
-        match self {
-            Node::Leaf { bounds, .. } | Node::Interior { bounds, .. } => bounds,
-        }
-    }
 }
 
 fn padded(lo: [f32; 3], hi: [f32; 3]) -> PrimRef {
@@ -167,7 +147,6 @@ impl Bvh {
             depth: 0,
         };
         flatten(&root, 0, &mut bvh);
-        debug_assert!(3 * bvh.depth <= STACK);
         bvh
     }
 }
@@ -250,7 +229,7 @@ fn build_node(refs: &mut [PrimRef], offset: usize, depth: usize) -> Node {
     }
 
     let area = bounds.half_area();
-    let mid = match best {
+    let (axis, mid) = match best {
         // A leaf costs n intersections; a split costs one more box test plus the children.
         Some((cost, _, _)) if n <= MAX_LEAF && area > 0.0 && n as f32 <= 1.0 + cost / area => {
             return leaf;
@@ -264,11 +243,11 @@ fn build_node(refs: &mut [PrimRef], offset: usize, depth: usize) -> Node {
                     i += 1;
                 }
             }
-            i
+            (axis, i)
         }
         // Every centre in one place: a few primitives make a leaf, many are halved.
         None if n <= MAX_LEAF => return leaf,
-        None => n / 2,
+        None => (0, n / 2),
     };
     debug_assert!(mid > 0 && mid < n);
 
@@ -286,65 +265,41 @@ fn build_node(refs: &mut [PrimRef], offset: usize, depth: usize) -> Node {
     };
     Node::Interior {
         bounds,
+        axis: axis as u32,
         children: Box::new((l, r)),
     }
 }
 
-/// The up-to-four children of a wide node made from binary node `node` (see the module
-/// docs): interior children replaced by their children, then, with three slots, the
-/// largest interior slot by its children. A leaf root makes a node of one slot.
-fn slots_of(node: &Node) -> Vec<&Node> {
-    let Node::Interior { children, .. } = node else {
-        return vec![node];
-    };
-    let mut slots = Vec::with_capacity(4);
-    for c in [&children.0, &children.1] {
-        match c {
-            Node::Leaf { .. } => slots.push(c),
-            Node::Interior { children: g, .. } => slots.extend([&g.0, &g.1]),
-        }
-    }
-    if slots.len() == 3 {
-        let widest = (0..3)
-            .filter(|&k| matches!(slots[k], Node::Interior { .. }))
-            .max_by(|&a, &b| {
-                let (x, y) = (slots[a].bounds().half_area(), slots[b].bounds().half_area());
-                x.total_cmp(&y)
-            });
-        if let Some(k) = widest
-            && let Node::Interior { children: g, .. } = slots[k]
-        {
-            slots.splice(k..=k, [&g.0, &g.1]);
-        }
-    }
-    slots
-}
-
-/// Appends the wide node made from `node` and, depth first, the wide nodes below it;
-/// returns its index.
-fn flatten(node: &Node, depth: usize, bvh: &mut Bvh) -> u32 {
+fn flatten(node: &Node, depth: usize, bvh: &mut Bvh) {
     bvh.depth = bvh.depth.max(depth);
-    let at = bvh.nodes.len();
-    bvh.nodes.push(BvhNode::default());
-    let mut wide = BvhNode {
-        count: [EMPTY_SLOT; 4],
-        ..BvhNode::default()
-    };
-    for (k, slot) in slots_of(node).into_iter().enumerate() {
-        let b = slot.bounds();
-        wide.lo_x[k] = b.lo[0];
-        wide.lo_y[k] = b.lo[1];
-        wide.lo_z[k] = b.lo[2];
-        wide.hi_x[k] = b.hi[0];
-        wide.hi_y[k] = b.hi[1];
-        wide.hi_z[k] = b.hi[2];
-        (wide.child[k], wide.count[k]) = match slot {
-            Node::Leaf { first, count, .. } => (*first, *count),
-            Node::Interior { .. } => (flatten(slot, depth + 1, bvh), 0),
-        };
+    match node {
+        Node::Leaf {
+            bounds,
+            first,
+            count,
+        } => bvh.nodes.push(BvhNode {
+            lo: bounds.lo,
+            first: *first,
+            hi: bounds.hi,
+            count_axis: count << 2,
+        }),
+        Node::Interior {
+            bounds,
+            axis,
+            children,
+        } => {
+            let at = bvh.nodes.len();
+            bvh.nodes.push(BvhNode {
+                lo: bounds.lo,
+                first: 0,
+                hi: bounds.hi,
+                count_axis: *axis,
+            });
+            flatten(&children.0, depth + 1, bvh);
+            bvh.nodes[at].first = bvh.nodes.len() as u32;
+            flatten(&children.1, depth + 1, bvh);
+        }
     }
-    bvh.nodes[at] = wide;
-    at as u32
 }
 
 #[cfg(test)]
@@ -360,39 +315,28 @@ mod tests {
         }
     }
 
-    /// Every primitive is in exactly one leaf, every node is some node's child, every
-    /// slot's box holds the boxes of its node's slots, and the stack bound holds.
+    /// Every primitive is in exactly one leaf, and every node's box holds its children.
     fn check(bvh: &Bvh, n: usize) {
         let mut seen = vec![0u32; n];
-        let mut parents = vec![0u32; bvh.nodes.len()];
         let mut ids: Vec<u32> = bvh.prim_ids.clone();
         ids.sort_unstable();
         assert_eq!(ids.len(), n);
-        for node in &bvh.nodes {
-            for k in 0..4 {
-                let (first, count) = (node.child[k], node.count[k]);
-                if count == EMPTY_SLOT {
-                    continue;
+        for (k, node) in bvh.nodes.iter().enumerate() {
+            let count = node.count_axis >> 2;
+            if count > 0 {
+                for &id in &bvh.prim_ids[node.first as usize..(node.first + count) as usize] {
+                    seen[(id & !TRIANGLE_BIT) as usize] += 1;
                 }
-                if count > 0 {
-                    for &id in &bvh.prim_ids[first as usize..(first + count) as usize] {
-                        seen[(id & !TRIANGLE_BIT) as usize] += 1;
+            } else {
+                for child in [k + 1, node.first as usize] {
+                    let c = &bvh.nodes[child];
+                    for a in 0..3 {
+                        assert!(node.lo[a] <= c.lo[a] && c.hi[a] <= node.hi[a]);
                     }
-                    continue;
-                }
-                parents[first as usize] += 1;
-                let c = &bvh.nodes[first as usize];
-                for j in (0..4).filter(|&j| c.count[j] != EMPTY_SLOT) {
-                    assert!(node.lo_x[k] <= c.lo_x[j] && c.hi_x[j] <= node.hi_x[k]);
-                    assert!(node.lo_y[k] <= c.lo_y[j] && c.hi_y[j] <= node.hi_y[k]);
-                    assert!(node.lo_z[k] <= c.lo_z[j] && c.hi_z[j] <= node.hi_z[k]);
                 }
             }
         }
         assert!(seen.iter().all(|&s| s == 1));
-        assert_eq!(parents[0], 0);
-        assert!(parents[1..].iter().all(|&p| p == 1));
-        assert!(3 * bvh.depth <= STACK);
     }
 
     #[test]

@@ -11,16 +11,14 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::buffers::{
-    BvhNode, EMPTY_SLOT, HitOut, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, RayIn,
-    SceneBuffers, Specialisation, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE,
+    BvhNode, HitOut, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, RayIn, SceneBuffers,
+    Specialisation, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE,
     TRIANGLE_WATERTIGHT, Triangle,
 };
 use crate::cpu::real::{Real, V3};
 
-/// WGSL `BVH_STACK`: the traversal stack, as deep as the builder lets it grow.
-pub const BVH_STACK: usize = crate::bvh::STACK;
-/// WGSL `NODE_NONE`: `descend`'s answer when no node is left to visit.
-pub const NODE_NONE: u32 = 0xffff_ffff;
+/// WGSL `BVH_STACK`: the traversal stack, as deep as the builder lets a tree be.
+pub const BVH_STACK: usize = crate::bvh::MAX_DEPTH;
 
 /// The camera, in the tracer's precision. WGSL: the camera fields of `params`.
 #[derive(Clone, Copy, Debug)]
@@ -504,128 +502,38 @@ pub fn hit_prim<R: Real>(
     (R::INFINITY, R::ZERO, R::ZERO)
 }
 
-/// WGSL `Span`: per lane, the part (t0, t1) of the ray's interval still inside a box.
-#[derive(Clone, Copy, Debug)]
-pub struct Span<R> {
-    /// Entry distance, one lane per child.
-    pub t0: [R; 4],
-    /// Exit distance, one lane per child.
-    pub t1: [R; 4],
-}
-
-/// WGSL `clip_slab`: `s` clipped, lane by lane, to the slab between planes `lo` and `hi`
-/// of one axis, the exit widened by `BOX_SLACK` of itself (pbrt's conservative test). A NaN
-/// slab constrains nothing.
-#[inline(always)]
-pub fn clip_slab<R: Real>(s: Span<R>, lo: [f32; 4], hi: [f32; 4], o: R, inv: R) -> Span<R> {
-    // Lane by lane, as WGSL's vec4 arithmetic is; index loops keep each line beside its
-    // WGSL twin.
-    let mut out = s;
-    for k in 0..4 {
-        let t_lo = (R::from_f32(lo[k]) - o) * inv;
-        let t_hi = (R::from_f32(hi[k]) - o) * inv;
-        let swap = t_hi < t_lo;
-        let near = select(t_lo, t_hi, swap);
-        let mut far = select(t_hi, t_lo, swap);
-        far = far + far.abs() * R::BOX_SLACK;
-        out.t0[k] = select(s.t0[k], near, near > s.t0[k]);
-        out.t1[k] = select(s.t1[k], far, far < s.t1[k]);
-    }
-    out
-}
-
-/// WGSL `Slots`: which of a node's four children the ray enters, and where.
-#[derive(Clone, Copy, Debug)]
-pub struct Slots<R> {
-    /// Entry distance into each child's box.
-    pub t0: [R; 4],
-    /// Whether the ray enters each child's box within (t_min, t_max).
-    pub hit: [bool; 4],
-}
-
-/// WGSL `box_slots`: the conservative slab test of all four child boxes of `node`; empty
-/// slots are never hit. `inv_dir` is 1 / dir per component (±inf for a zero component).
-#[inline(always)]
-pub fn box_slots<R: Real>(
+/// WGSL `box_interval`: the part (t0, t1) of (t_min, t_max) inside the node's box, by the
+/// conservative slab test; hit when t0 <= t1.
+pub fn box_interval<R: Real>(
     node: &BvhNode,
     origin: V3<R>,
     inv_dir: V3<R>,
     t_min: R,
     t_max: R,
-) -> Slots<R> {
-    let mut s = Span {
-        t0: [t_min; 4],
-        t1: [t_max; 4],
-    };
-    s = clip_slab(s, node.lo_x, node.hi_x, origin.x, inv_dir.x);
-    s = clip_slab(s, node.lo_y, node.hi_y, origin.y, inv_dir.y);
-    s = clip_slab(s, node.lo_z, node.hi_z, origin.z, inv_dir.z);
-    let hit = |k: usize| s.t0[k] <= s.t1[k] && node.count[k] != EMPTY_SLOT;
-    Slots {
-        t0: s.t0,
-        hit: [hit(0), hit(1), hit(2), hit(3)],
-    }
-}
-
-/// WGSL `order`: compare-exchange of lanes `a < b` of a sorting network: wanted lanes
-/// before unwanted ones, and of wanted lanes the nearer first.
-#[inline(always)]
-pub fn order<R: Real>(
-    key: &mut [R; 4],
-    id: &mut [u32; 4],
-    want: &mut [bool; 4],
-    a: usize,
-    b: usize,
-) {
-    if want[b] && (!want[a] || key[b] < key[a]) {
-        key.swap(a, b);
-        id.swap(a, b);
-        want.swap(a, b);
-    }
-}
-
-/// WGSL `descend`: the next node to visit once a node's leaves are done. Its interior
-/// children that the ray enters no farther than `bound` are sorted nearest first; the
-/// nearest is returned and the others pushed, farthest first. With none, the top of the
-/// stack is popped; NODE_NONE when it is empty.
-#[inline(always)]
-pub fn descend<R: Real>(
-    node: &BvhNode,
-    s: &Slots<R>,
-    bound: R,
-    stack: &mut [u32; BVH_STACK],
-    sp: &mut u32,
-) -> u32 {
-    let mut key = s.t0;
-    let mut id = node.child;
-    let wanted = |k: usize| s.hit[k] && node.count[k] == 0 && s.t0[k] <= bound;
-    let mut want = [wanted(0), wanted(1), wanted(2), wanted(3)];
-    let n = want[0] as u32 + want[1] as u32 + want[2] as u32 + want[3] as u32;
-    order(&mut key, &mut id, &mut want, 0, 1);
-    order(&mut key, &mut id, &mut want, 2, 3);
-    order(&mut key, &mut id, &mut want, 0, 2);
-    order(&mut key, &mut id, &mut want, 1, 3);
-    order(&mut key, &mut id, &mut want, 1, 2);
-    if n > 3 {
-        stack[*sp as usize] = id[3];
-        *sp += 1;
-    }
-    if n > 2 {
-        stack[*sp as usize] = id[2];
-        *sp += 1;
-    }
-    if n > 1 {
-        stack[*sp as usize] = id[1];
-        *sp += 1;
-    }
-    if n > 0 {
-        return id[0];
-    }
-    if *sp == 0 {
-        return NODE_NONE;
-    }
-    *sp -= 1;
-    stack[*sp as usize]
+) -> (R, R) {
+    let t_lo = (V3::from_f32(node.lo) - origin) * inv_dir;
+    let t_hi = (V3::from_f32(node.hi) - origin) * inv_dir;
+    let swap = (t_hi.x < t_lo.x, t_hi.y < t_lo.y, t_hi.z < t_lo.z);
+    let near = V3::new(
+        select(t_lo.x, t_hi.x, swap.0),
+        select(t_lo.y, t_hi.y, swap.1),
+        select(t_lo.z, t_hi.z, swap.2),
+    );
+    let mut far = V3::new(
+        select(t_hi.x, t_lo.x, swap.0),
+        select(t_hi.y, t_lo.y, swap.1),
+        select(t_hi.z, t_lo.z, swap.2),
+    );
+    far = far + far.abs() * R::BOX_SLACK;
+    let mut t0 = t_min;
+    let mut t1 = t_max;
+    t0 = select(t0, near.x, near.x > t0);
+    t0 = select(t0, near.y, near.y > t0);
+    t0 = select(t0, near.z, near.z > t0);
+    t1 = select(t1, far.x, far.x < t1);
+    t1 = select(t1, far.y, far.y < t1);
+    t1 = select(t1, far.z, far.z < t1);
+    (t0, t1)
 }
 
 /// WGSL `select(f, t, c)`: `t` when `c`, else `f`.
@@ -646,9 +554,8 @@ pub fn nearer<R: Real>(t: R, id: u32, best: &Hit<R>) -> bool {
     t < best.t || (t == best.t && id < best.prim && best.prim != PRIM_NONE)
 }
 
-/// WGSL `closest_hit_bvh`: depth first through the wide BVH; at each node all four
-/// boxes are tested, hit leaves searched in slot order, then `descend`. A fixed stack (the
-/// builder bounds the depth) and one step per node, so a NaN ray cannot loop.
+/// WGSL `closest_hit_bvh`: depth first, both children's boxes tested, the nearer entered
+/// first; fixed stack, one step per node.
 pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
     let mut best = Hit {
         t: t_max,
@@ -656,67 +563,137 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
         u: R::ZERO,
         v: R::ZERO,
     };
+    let sh = ray_shear(g, ray.dir);
+    let inv_dir = V3::splat(R::ONE) / ray.dir;
+    let nodes = &g.buf.nodes;
     if g.buf.params.n_nodes == 0 {
         return best;
     }
-    let sh = ray_shear(g, ray.dir);
-    let inv_dir = V3::splat(R::ONE) / ray.dir;
+    let root = box_interval(&nodes[0], ray.origin, inv_dir, t_min, t_max);
+    if !(root.0 <= root.1) {
+        return best;
+    }
     let mut stack = [0u32; BVH_STACK];
-    let mut sp = 0u32;
+    let mut sp = 0usize;
     let mut at = 0u32;
-    let mut step = 0u32;
-    while step < g.buf.params.n_nodes && at != NODE_NONE {
-        let node = &g.buf.nodes[at as usize];
-        let s = box_slots(node, ray.origin, inv_dir, t_min, tie_bound(&best));
-        for k in 0..4 {
-            if s.hit[k] && node.count[k] != 0 {
-                for p in node.child[k]..node.child[k] + node.count[k] {
-                    let id = g.buf.prim_ids[p as usize];
-                    let h = hit_prim(g, ray, sh, id, t_min, tie_bound(&best));
-                    if nearer(h.0, id, &best) {
-                        best = Hit {
-                            t: h.0,
-                            prim: id,
-                            u: h.1,
-                            v: h.2,
-                        };
-                    }
+    for _step in 0..g.buf.params.n_nodes {
+        let node = &nodes[at as usize];
+        let count = node.count_axis >> 2;
+        if count == 0 {
+            let bound = tie_bound(&best);
+            let left = box_interval(&nodes[at as usize + 1], ray.origin, inv_dir, t_min, bound);
+            let right = box_interval(
+                &nodes[node.first as usize],
+                ray.origin,
+                inv_dir,
+                t_min,
+                bound,
+            );
+            let hit_left = left.0 <= left.1;
+            let hit_right = right.0 <= right.1;
+            if hit_left && hit_right {
+                if right.0 < left.0 {
+                    stack[sp] = at + 1;
+                    at = node.first;
+                } else {
+                    stack[sp] = node.first;
+                    at += 1;
+                }
+                sp += 1;
+                continue;
+            }
+            if hit_left {
+                at += 1;
+                continue;
+            }
+            if hit_right {
+                at = node.first;
+                continue;
+            }
+        } else {
+            for k in node.first..node.first + count {
+                let id = g.buf.prim_ids[k as usize];
+                let h = hit_prim(g, ray, sh, id, t_min, tie_bound(&best));
+                if nearer(h.0, id, &best) {
+                    best = Hit {
+                        t: h.0,
+                        prim: id,
+                        u: h.1,
+                        v: h.2,
+                    };
                 }
             }
         }
-        at = descend(node, &s, tie_bound(&best), &mut stack, &mut sp);
-        step += 1;
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        at = stack[sp];
     }
     best
 }
 
-/// WGSL `occluded_bvh`: `occluded` through the BVH, in `closest_hit_bvh`'s order; stops
-/// at the first hit.
+/// WGSL `occluded_bvh`: `occluded` through the BVH; stops at the first hit.
 pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+    let sh = ray_shear(g, ray.dir);
+    let inv_dir = V3::splat(R::ONE) / ray.dir;
+    let nodes = &g.buf.nodes;
     if g.buf.params.n_nodes == 0 {
         return false;
     }
-    let sh = ray_shear(g, ray.dir);
-    let inv_dir = V3::splat(R::ONE) / ray.dir;
+    let root = box_interval(&nodes[0], ray.origin, inv_dir, t_min, t_max);
+    if !(root.0 <= root.1) {
+        return false;
+    }
     let mut stack = [0u32; BVH_STACK];
-    let mut sp = 0u32;
+    let mut sp = 0usize;
     let mut at = 0u32;
-    let mut step = 0u32;
-    while step < g.buf.params.n_nodes && at != NODE_NONE {
-        let node = &g.buf.nodes[at as usize];
-        let s = box_slots(node, ray.origin, inv_dir, t_min, t_max);
-        for k in 0..4 {
-            if s.hit[k] && node.count[k] != 0 {
-                for p in node.child[k]..node.child[k] + node.count[k] {
-                    let id = g.buf.prim_ids[p as usize];
-                    if id != skip && hit_prim(g, ray, sh, id, t_min, t_max).0 < t_max {
-                        return true;
-                    }
+    for _step in 0..g.buf.params.n_nodes {
+        let node = &nodes[at as usize];
+        let count = node.count_axis >> 2;
+        if count == 0 {
+            let left = box_interval(&nodes[at as usize + 1], ray.origin, inv_dir, t_min, t_max);
+            let right = box_interval(
+                &nodes[node.first as usize],
+                ray.origin,
+                inv_dir,
+                t_min,
+                t_max,
+            );
+            let hit_left = left.0 <= left.1;
+            let hit_right = right.0 <= right.1;
+            if hit_left && hit_right {
+                if right.0 < left.0 {
+                    stack[sp] = at + 1;
+                    at = node.first;
+                } else {
+                    stack[sp] = node.first;
+                    at += 1;
+                }
+                sp += 1;
+                continue;
+            }
+            if hit_left {
+                at += 1;
+                continue;
+            }
+            if hit_right {
+                at = node.first;
+                continue;
+            }
+        } else {
+            for k in node.first..node.first + count {
+                let id = g.buf.prim_ids[k as usize];
+                if id != skip && hit_prim(g, ray, sh, id, t_min, t_max).0 < t_max {
+                    return true;
                 }
             }
         }
-        at = descend(node, &s, t_max, &mut stack, &mut sp);
-        step += 1;
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        at = stack[sp];
     }
     false
 }
