@@ -16,6 +16,7 @@ pub mod buffers;
 pub mod bvh;
 pub mod compare;
 pub mod cpu;
+pub mod fuzzing;
 pub mod gpu;
 pub mod image;
 pub mod oracle;

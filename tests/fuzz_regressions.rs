@@ -3,36 +3,7 @@
 
 use std::path::Path;
 
-use glint::scene::Scene;
-
-/// The fuzz targets' own harnesses, without libFuzzer.
-fn scene_parse(data: &[u8]) -> Result<(), String> {
-    let src = std::str::from_utf8(data).map_err(|e| e.to_string())?;
-    let no_files = |_: &Path| -> Result<Vec<u8>, String> { Err("no files".into()) };
-    Scene::parse_with(src, Path::new("fuzz.toml"), &no_files)
-        .map(|_| ())
-        .map_err(|e| e.to_string())
-}
-
-fn obj_load(data: &[u8]) -> Result<(), String> {
-    const SCENE: &str = "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\
-        up = [0.0, 1.0, 0.0]\nfov = 45.0\nwidth = 4\nheight = 4\n\
-        [[meshes]]\nfile = \"fuzz.obj\"\n";
-    let (obj, mtl) = match data.iter().position(|&b| b == 0xff) {
-        Some(k) => (&data[..k], &data[k + 1..]),
-        None => (data, &[][..]),
-    };
-    let files = |p: &Path| -> Result<Vec<u8>, String> {
-        Ok(if p.extension().is_some_and(|e| e == "obj") {
-            obj.to_vec()
-        } else {
-            mtl.to_vec()
-        })
-    };
-    Scene::parse_with(SCENE, Path::new("fuzz.toml"), &files)
-        .map(|_| ())
-        .map_err(|e| e.to_string())
-}
+use glint::fuzzing::{obj_load, scene_parse};
 
 #[test]
 fn every_fuzz_finding_is_an_error_not_a_panic() {
