@@ -633,7 +633,8 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
     best
 }
 
-/// WGSL `occluded_bvh`: `occluded` through the BVH; stops at the first hit.
+/// WGSL `occluded_bvh`: `occluded` through the BVH; stops at the first hit. Repeats
+/// `closest_hit_bvh`'s loop as the shader does (see there why).
 pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
     let sh = ray_shear(g, ray.dir);
     let inv_dir = V3::splat(R::ONE) / ray.dir;
