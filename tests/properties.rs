@@ -5,84 +5,11 @@
 
 mod common;
 
-use std::fmt::Write;
 use std::path::Path;
 
-use common::{Rng, check_agreement, render_gpu};
+use common::{Rng, check_agreement, random_scene, render_gpu};
 use glint::buffers::{SceneBuffers, Specialisation};
 use glint::scene::Scene;
-
-fn v3(rng: &mut Rng, lo: f32, hi: f32) -> String {
-    format!(
-        "[{}, {}, {}]",
-        rng.range(lo, hi),
-        rng.range(lo, hi),
-        rng.range(lo, hi)
-    )
-}
-
-/// A random scene as TOML text (so the parser is part of the property too).
-fn random_scene(rng: &mut Rng) -> String {
-    let mut s = String::new();
-    let algo = ["naive", "moller-trumbore", "watertight"][(rng.next_u64() % 3) as usize];
-    writeln!(s, "ambient = {}", v3(rng, 0.0, 0.4)).unwrap();
-    writeln!(s, "background = {}", v3(rng, 0.0, 0.3)).unwrap();
-    writeln!(s, "triangle = \"{algo}\"").unwrap();
-    writeln!(s, "shadows = {}", rng.next_u64().is_multiple_of(2)).unwrap();
-    writeln!(s, "[camera]").unwrap();
-    writeln!(s, "eye = {}", v3(rng, -8.0, 8.0)).unwrap();
-    writeln!(s, "look_at = {}", v3(rng, -1.0, 1.0)).unwrap();
-    writeln!(s, "up = {}", v3(rng, -1.0, 1.0)).unwrap();
-    writeln!(s, "fov = {}", rng.range(20.0, 110.0)).unwrap();
-    writeln!(s, "width = 48\nheight = 36").unwrap();
-    for _ in 0..1 + rng.next_u64() % 3 {
-        writeln!(s, "[[lights]]").unwrap();
-        writeln!(s, "position = {}", v3(rng, -10.0, 10.0)).unwrap();
-        writeln!(s, "color = {}", v3(rng, 0.0, 1.0)).unwrap();
-    }
-    let n_materials = 1 + rng.next_u64() % 3;
-    for k in 0..n_materials {
-        let model = ["ambient", "diffuse", "phong"][(rng.next_u64() % 3) as usize];
-        writeln!(s, "[materials.m{k}]\nmodel = \"{model}\"").unwrap();
-        writeln!(s, "ka = {}", v3(rng, 0.0, 1.0)).unwrap();
-        if model != "ambient" {
-            writeln!(s, "kd = {}", v3(rng, 0.0, 1.0)).unwrap();
-        }
-        if model == "phong" {
-            // Integer exponents: raised by squaring on both tracers (pow differs by ULPs).
-            writeln!(s, "ks = {}", v3(rng, 0.0, 1.0)).unwrap();
-            writeln!(s, "n = {}.0", rng.next_u64() % 200).unwrap();
-        }
-    }
-    let mat = |rng: &mut Rng| format!("m{}", rng.next_u64() % n_materials);
-    for _ in 0..rng.next_u64() % 6 {
-        writeln!(s, "[[spheres]]").unwrap();
-        writeln!(s, "center = {}", v3(rng, -3.0, 3.0)).unwrap();
-        writeln!(s, "radius = {}", rng.range(0.05, 2.0)).unwrap();
-        writeln!(s, "material = \"{}\"", mat(rng)).unwrap();
-    }
-    // Sometimes a few triangles (traced by testing each), sometimes enough for the BVH.
-    let n_tris = if rng.next_u64().is_multiple_of(2) {
-        rng.next_u64() % 8
-    } else {
-        20 + rng.next_u64() % 60
-    };
-    for _ in 0..n_tris {
-        let c = [0, 1, 2].map(|_| rng.range(-3.0, 3.0));
-        let p = |rng: &mut Rng| {
-            format!(
-                "[{}, {}, {}]",
-                c[0] + rng.range(-1.0, 1.0),
-                c[1] + rng.range(-1.0, 1.0),
-                c[2] + rng.range(-1.0, 1.0)
-            )
-        };
-        let (a, b, d) = (p(rng), p(rng), p(rng));
-        writeln!(s, "[[triangles]]\nvertices = [{a}, {b}, {d}]").unwrap();
-        writeln!(s, "material = \"{}\"", mat(rng)).unwrap();
-    }
-    s
-}
 
 /// Random scenes whose GPU and CPU images differ in low f32 bits on lavapipe (never in
 /// 8 bits, never in hit/miss): an open finding. Scene #16: 8 pixels of a Phong sphere

@@ -1,6 +1,7 @@
 //! The CPU tracers: the f32 mirror of the shader and the f64 ground truth, both from the
 //! one generic `trace.rs`, rows in parallel with rayon.
 
+pub mod packet;
 pub mod real;
 pub mod trace;
 
@@ -46,7 +47,40 @@ fn render_with<R: Real>(g: &Globals<R>, progress: &Progress<'_>) -> Image {
     }
 }
 
-/// Renders with the f32 mirror of `trace.wgsl`, specialised as the GPU would be.
+/// Renders in packets of `packet::LANES` camera rays (blocks of `PACKET_W` × `PACKET_H`
+/// pixels, bands of `PACKET_H` rows in parallel): the same image as [`render_with`].
+fn render_packets(g: &Globals<f32>, progress: &Progress<'_>) -> Image {
+    let (w, h) = (g.cam.width, g.cam.height);
+    let mut pixels = vec![[0.0f32; 4]; w as usize * h as usize];
+    let done = AtomicU32::new(0);
+    let band = packet::PACKET_H as usize * w as usize;
+    pixels
+        .par_chunks_mut(band)
+        .enumerate()
+        .for_each(|(b, rows)| {
+            let j = b as u32 * packet::PACKET_H;
+            for i in (0..w).step_by(packet::PACKET_W as usize) {
+                let px = packet::trace_packet(g, i, j);
+                for (l, c) in px.iter().enumerate() {
+                    let (x, y) = (i + l as u32 % packet::PACKET_W, l as u32 / packet::PACKET_W);
+                    if x < w && (y as usize) * (w as usize) < rows.len() {
+                        rows[y as usize * w as usize + x as usize] = *c;
+                    }
+                }
+            }
+            let n = rows.len() as u32 / w;
+            progress(done.fetch_add(n, Ordering::Relaxed) + n, h);
+        });
+    Image {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
+/// Renders in f32 as the shader does, specialised as the GPU would be: through the BVH in
+/// packets (`packet.rs`), else pixel by pixel with the mirror's `trace_pixel`. The image
+/// is [`render_f32_mirror`]'s, bit for bit (`tests/packets.rs`).
 pub fn render_f32(buf: &SceneBuffers, spec: Specialisation) -> Image {
     render_f32_progress(buf, spec, &|_, _| {})
 }
@@ -62,7 +96,21 @@ pub fn render_f32_progress(
         buf,
         spec,
     };
+    if spec.use_bvh {
+        return render_packets(&g, progress);
+    }
     render_with(&g, progress)
+}
+
+/// Renders with the f32 mirror of `trace.wgsl` itself, one `trace_pixel` per pixel: the
+/// slower twin that [`render_f32`] is checked against.
+pub fn render_f32_mirror(buf: &SceneBuffers, spec: Specialisation) -> Image {
+    let g = Globals {
+        cam: Camera::from_params(&buf.params),
+        buf,
+        spec,
+    };
+    render_with(&g, &|_, _| {})
 }
 
 /// Renders the f64 ground truth: the same algorithms with the camera basis, every

@@ -1,0 +1,661 @@
+//! The CPU's fast path for camera rays: eight rays (a 4×2 block of pixels) walk the BVH
+//! together, so that each node is fetched once for eight rays and its two child boxes
+//! are tested against all eight at once (the lane loops below are written for LLVM to
+//! vectorise).
+//!
+//! This is not a mirror of a WGSL function: it is the mirror's faster twin, and it gives
+//! the same image bit for bit. Per ray it runs the mirror's own code for everything that
+//! decides a value: `camera_ray`, `ray_shear`, `hit_prim` (with the ray's own
+//! `tie_bound`), `nearer` and `shade`. Only the order in which leaves are reached
+//! differs, and `closest_hit_bvh`'s result does not depend on that order: it is the hit
+//! with the smallest t and, of equal t, the lowest primitive id (what `closest_hit_all`
+//! keeps), because every box test is conservative for any bound past the nearest hit.
+//! `tests/packets.rs` checks the two images against each other, bit for bit.
+
+// Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
+#![allow(clippy::needless_range_loop)]
+
+use super::real::V3;
+use super::trace::{
+    BVH_STACK, Globals, Hit, Ray, Shear, clamp01, edge_function, hit_material, hit_prim,
+    in_interval, max0, nearer, occluded, phong_power, shadow_origin, tie_bound,
+};
+use crate::buffers::{
+    BOX_SLACK, BvhNode, INFINITY, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE,
+    TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle,
+};
+
+/// Rays per packet.
+pub const LANES: usize = 8;
+/// Packet width in pixels (the packet is `PACKET_W` × `PACKET_H`).
+pub const PACKET_W: u32 = 4;
+/// Packet height in pixels.
+pub const PACKET_H: u32 = 2;
+
+/// A bit per lane.
+type Mask = u8;
+
+/// Rays from one origin, with their reciprocal directions as structure of arrays.
+struct Lanes {
+    origin: V3<f32>,
+    ix: [f32; LANES],
+    iy: [f32; LANES],
+    iz: [f32; LANES],
+}
+
+/// `box_interval` for every lane at once: the lanes whose ray meets `node`'s box in
+/// (t_min, bound), and each lane's entry distance. The same operations as
+/// `box_interval`, lane by lane.
+#[inline(always)]
+fn box_lanes(
+    node: &BvhNode,
+    r: &Lanes,
+    t_min: f32,
+    bound: &[f32; LANES],
+    near_out: &mut [f32; LANES],
+) -> Mask {
+    // `node.lo - origin` is the same for every lane: computed once.
+    let lo = [
+        node.lo[0] - r.origin.x,
+        node.lo[1] - r.origin.y,
+        node.lo[2] - r.origin.z,
+    ];
+    let hi = [
+        node.hi[0] - r.origin.x,
+        node.hi[1] - r.origin.y,
+        node.hi[2] - r.origin.z,
+    ];
+    let mut hit = [false; LANES];
+    for l in 0..LANES {
+        let lx = lo[0] * r.ix[l];
+        let ly = lo[1] * r.iy[l];
+        let lz = lo[2] * r.iz[l];
+        let hx = hi[0] * r.ix[l];
+        let hy = hi[1] * r.iy[l];
+        let hz = hi[2] * r.iz[l];
+        let (sx, sy, sz) = (hx < lx, hy < ly, hz < lz);
+        let nx = if sx { hx } else { lx };
+        let ny = if sy { hy } else { ly };
+        let nz = if sz { hz } else { lz };
+        let mut fx = if sx { lx } else { hx };
+        let mut fy = if sy { ly } else { hy };
+        let mut fz = if sz { lz } else { hz };
+        fx = fx + fx.abs() * BOX_SLACK;
+        fy = fy + fy.abs() * BOX_SLACK;
+        fz = fz + fz.abs() * BOX_SLACK;
+        let mut t0 = t_min;
+        let mut t1 = bound[l];
+        t0 = if nx > t0 { nx } else { t0 };
+        t0 = if ny > t0 { ny } else { t0 };
+        t0 = if nz > t0 { nz } else { t0 };
+        t1 = if fx < t1 { fx } else { t1 };
+        t1 = if fy < t1 { fy } else { t1 };
+        t1 = if fz < t1 { fz } else { t1 };
+        near_out[l] = t0;
+        hit[l] = t0 <= t1;
+    }
+    let mut m: Mask = 0;
+    for (l, &h) in hit.iter().enumerate() {
+        m |= (h as Mask) << l;
+    }
+    m
+}
+
+/// The lanes' `Shear`s as structure of arrays.
+struct ShearLanes {
+    kx: [u32; LANES],
+    ky: [u32; LANES],
+    kz: [u32; LANES],
+    sx: [f32; LANES],
+    sy: [f32; LANES],
+    sz: [f32; LANES],
+}
+
+/// `ray_shear` of every lane: `make_shear` lane by lane when `watertight` (the same
+/// comparisons, the same one division), else the identity `ray_shear` gives.
+#[inline(always)]
+fn shear_lanes(dir: &[[f32; LANES]; 3], watertight: bool) -> ShearLanes {
+    let mut sh = ShearLanes {
+        kx: [0; LANES],
+        ky: [1; LANES],
+        kz: [2; LANES],
+        sx: [0.0; LANES],
+        sy: [0.0; LANES],
+        sz: [1.0; LANES],
+    };
+    if !watertight {
+        return sh;
+    }
+    for l in 0..LANES {
+        let d = [dir[0][l], dir[1][l], dir[2][l]];
+        let ad = [d[0].abs(), d[1].abs(), d[2].abs()];
+        let mut kz = if ad[1] > ad[0] { 1 } else { 0 };
+        if ad[2] > pick(&ad, kz) {
+            kz = 2;
+        }
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if pick(&d, kz) < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let sz = 1.0 / pick(&d, kz);
+        sh.kx[l] = kx;
+        sh.ky[l] = ky;
+        sh.kz[l] = kz;
+        sh.sx[l] = pick(&d, kx) * sz;
+        sh.sy[l] = pick(&d, ky) * sz;
+        sh.sz[l] = sz;
+    }
+    sh
+}
+
+/// Each lane's (t, u, v), t = INFINITY on a miss.
+struct TriLanes {
+    t: [f32; LANES],
+    u: [f32; LANES],
+    v: [f32; LANES],
+}
+
+/// `V3::get`: component k of (x, y, z), as selects so that a lane loop vectorises.
+#[inline(always)]
+fn pick(v: &[f32; 3], k: u32) -> f32 {
+    if k == 0 {
+        v[0]
+    } else if k == 1 {
+        v[1]
+    } else {
+        v[2]
+    }
+}
+
+/// `hit_triangle_watertight` of one triangle for every lane, with lane l's `t_max` =
+/// `t_max[l]`: the same operations in the same order, lane by lane. An edge function
+/// that comes out exactly 0 is recomputed by `edge_function` itself (its exact
+/// fallback), so that every lane's (t, u, v) is the scalar test's, bit for bit.
+#[inline(always)]
+fn watertight_lanes(
+    tri: &Triangle,
+    r: &Lanes,
+    sh: &ShearLanes,
+    mask: Mask,
+    t_min: f32,
+    t_max: &[f32; LANES],
+) -> TriLanes {
+    let o = r.origin;
+    let a = [tri.a[0] - o.x, tri.a[1] - o.y, tri.a[2] - o.z];
+    let b = [tri.b[0] - o.x, tri.b[1] - o.y, tri.b[2] - o.z];
+    let c = [tri.c[0] - o.x, tri.c[1] - o.y, tri.c[2] - o.z];
+    let mut e = [[0.0f32; LANES]; 3];
+    let mut xy = [[0.0f32; LANES]; 6];
+    let mut zero: Mask = 0;
+    for l in 0..LANES {
+        let (kx, ky, kz) = (sh.kx[l], sh.ky[l], sh.kz[l]);
+        let ax = pick(&a, kx) - sh.sx[l] * pick(&a, kz);
+        let ay = pick(&a, ky) - sh.sy[l] * pick(&a, kz);
+        let bx = pick(&b, kx) - sh.sx[l] * pick(&b, kz);
+        let by = pick(&b, ky) - sh.sy[l] * pick(&b, kz);
+        let cx = pick(&c, kx) - sh.sx[l] * pick(&c, kz);
+        let cy = pick(&c, ky) - sh.sy[l] * pick(&c, kz);
+        e[0][l] = cx * by - cy * bx;
+        e[1][l] = ax * cy - ay * cx;
+        e[2][l] = bx * ay - by * ax;
+        xy[0][l] = ax;
+        xy[1][l] = ay;
+        xy[2][l] = bx;
+        xy[3][l] = by;
+        xy[4][l] = cx;
+        xy[5][l] = cy;
+        let z = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
+        zero |= (z as Mask) << l;
+    }
+    let mut fix = zero & mask;
+    while fix != 0 {
+        let l = fix.trailing_zeros() as usize;
+        fix &= fix - 1;
+        let [ax, ay, bx, by, cx, cy] = [0, 1, 2, 3, 4, 5].map(|k| xy[k][l]);
+        e[0][l] = edge_function(cx, by, cy, bx);
+        e[1][l] = edge_function(ax, cy, ay, cx);
+        e[2][l] = edge_function(bx, ay, by, ax);
+    }
+    let mut out = TriLanes {
+        t: [INFINITY; LANES],
+        u: [0.0; LANES],
+        v: [0.0; LANES],
+    };
+    for l in 0..LANES {
+        let (u, v, w) = (e[0][l], e[1][l], e[2][l]);
+        let outside = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
+        let det = u + v + w;
+        #[allow(clippy::eq_op)]
+        let degenerate = det == 0.0 || det != det;
+        let kz = sh.kz[l];
+        let az = sh.sz[l] * pick(&a, kz);
+        let bz = sh.sz[l] * pick(&b, kz);
+        let cz = sh.sz[l] * pick(&c, kz);
+        let t_scaled = u * az + v * bz + w * cz;
+        let inv_det = 1.0 / det;
+        let t = t_scaled * inv_det;
+        let hit = !outside && !degenerate && in_interval(t, t_min, t_max[l]);
+        out.t[l] = if hit { t } else { INFINITY };
+        out.u[l] = if hit { v * inv_det } else { 0.0 };
+        out.v[l] = if hit { w * inv_det } else { 0.0 };
+    }
+    out
+}
+
+/// `closest_hit_bvh` for the rays of `rays` whose bit is set in `active` (the others are
+/// returned as misses): the same hit for each ray as `closest_hit_bvh` gives it.
+/// Every ray must have `rays[0].origin` as its origin (camera rays do), and `t_max` must
+/// be finite (`finite_bound`), as `closest_hit` passes it.
+#[inline(always)]
+pub fn closest_hit_packet(
+    g: &Globals<f32>,
+    rays: &[Ray<f32>; LANES],
+    active: Mask,
+    t_min: f32,
+    t_max: f32,
+) -> [Hit<f32>; LANES] {
+    let miss = Hit {
+        t: t_max,
+        prim: PRIM_NONE,
+        u: 0.0,
+        v: 0.0,
+    };
+    let mut best = [miss; LANES];
+    let nodes = &g.buf.nodes;
+    if g.buf.params.n_nodes == 0 || active == 0 {
+        return best;
+    }
+    let mut dir = [[0.0f32; LANES]; 3];
+    for l in 0..LANES {
+        dir[0][l] = rays[l].dir.x;
+        dir[1][l] = rays[l].dir.y;
+        dir[2][l] = rays[l].dir.z;
+    }
+    let mut r = Lanes {
+        origin: rays[0].origin,
+        ix: [0.0; LANES],
+        iy: [0.0; LANES],
+        iz: [0.0; LANES],
+    };
+    for l in 0..LANES {
+        r.ix[l] = 1.0 / dir[0][l];
+        r.iy[l] = 1.0 / dir[1][l];
+        r.iz[l] = 1.0 / dir[2][l];
+    }
+    let watertight = g.spec.triangle_algo == TRIANGLE_WATERTIGHT;
+    let lane_triangles = g.spec.has_triangles && watertight;
+    let sh = shear_lanes(&dir, watertight);
+    let mut near_l = [0.0f32; LANES];
+    let mut near_r = [0.0f32; LANES];
+    let mut bound = [t_max; LANES];
+    let mut mask = box_lanes(&nodes[0], &r, t_min, &bound, &mut near_l) & active;
+    if mask == 0 {
+        return best;
+    }
+    let mut stack = [(0u32, 0 as Mask); BVH_STACK];
+    let mut sp = 0usize;
+    let mut at = 0u32;
+    for _step in 0..g.buf.params.n_nodes {
+        let node = &nodes[at as usize];
+        let count = node.count_axis >> 2;
+        if count == 0 {
+            let left = &nodes[at as usize + 1];
+            let right = &nodes[node.first as usize];
+            let ml = box_lanes(left, &r, t_min, &bound, &mut near_l) & mask;
+            let mr = box_lanes(right, &r, t_min, &bound, &mut near_r) & mask;
+            if ml != 0 && mr != 0 {
+                // Nearer first by the vote of the lanes that meet both.
+                let both = ml & mr;
+                let mut vote = 0i32;
+                for l in 0..LANES {
+                    let w = ((both >> l) & 1) as i32;
+                    vote += w * if near_r[l] < near_l[l] { 1 } else { -1 };
+                }
+                if vote > 0 {
+                    stack[sp] = (at + 1, ml);
+                    at = node.first;
+                    mask = mr;
+                } else {
+                    stack[sp] = (node.first, mr);
+                    at += 1;
+                    mask = ml;
+                }
+                sp += 1;
+                continue;
+            }
+            if ml != 0 {
+                at += 1;
+                mask = ml;
+                continue;
+            }
+            if mr != 0 {
+                at = node.first;
+                mask = mr;
+                continue;
+            }
+        } else {
+            for k in node.first..node.first + count {
+                let id = g.buf.prim_ids[k as usize];
+                if lane_triangles && (id & TRIANGLE_BIT) != 0 {
+                    let tri = &g.buf.triangles[(id & !TRIANGLE_BIT) as usize];
+                    let h = watertight_lanes(tri, &r, &sh, mask, t_min, &bound);
+                    let mut m = mask;
+                    while m != 0 {
+                        let l = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        if nearer(h.t[l], id, &best[l]) {
+                            best[l] = Hit {
+                                t: h.t[l],
+                                prim: id,
+                                u: h.u[l],
+                                v: h.v[l],
+                            };
+                            bound[l] = tie_bound(&best[l]);
+                        }
+                    }
+                    continue;
+                }
+                let mut m = mask;
+                while m != 0 {
+                    let l = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let shear = Shear {
+                        kx: sh.kx[l],
+                        ky: sh.ky[l],
+                        kz: sh.kz[l],
+                        sx: sh.sx[l],
+                        sy: sh.sy[l],
+                        sz: sh.sz[l],
+                    };
+                    let h = hit_prim(g, rays[l], shear, id, t_min, bound[l]);
+                    if nearer(h.0, id, &best[l]) {
+                        best[l] = Hit {
+                            t: h.0,
+                            prim: id,
+                            u: h.1,
+                            v: h.2,
+                        };
+                        bound[l] = tie_bound(&best[l]);
+                    }
+                }
+            }
+        }
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        (at, mask) = stack[sp];
+    }
+    best
+}
+
+/// `trace_pixel` for the `PACKET_W` × `PACKET_H` block whose top-left pixel is (i, j),
+/// lane `dy * PACKET_W + dx` for pixel (i + dx, j + dy); pixels outside the image are
+/// left out. Needs `g.spec.use_bvh`.
+pub fn trace_packet(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above.
+        return unsafe { trace_packet_avx2(g, i, j) };
+    }
+    trace_packet_body(g, i, j)
+}
+
+/// `trace_packet` compiled for AVX2: the lane loops become eight-wide. Floating-point
+/// results do not change with the instruction set (Rust never contracts `a * b + c`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn trace_packet_avx2(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
+    trace_packet_body(g, i, j)
+}
+
+/// `camera_ray` for the pixels of the block at (i, j), lane by lane with the same
+/// operations in the same order, written as lane loops so that they vectorise; and the
+/// lanes whose pixel lies inside the image.
+#[inline(always)]
+pub fn camera_rays(g: &Globals<f32>, i: u32, j: u32) -> ([Ray<f32>; LANES], Mask) {
+    let c = &g.cam;
+    let half = 1.0f32 / (1.0 + 1.0);
+    let two = 1.0f32 + 1.0;
+    let mut active: Mask = 0;
+    for l in 0..LANES {
+        let (px, py) = (i + l as u32 % PACKET_W, j + l as u32 / PACKET_W);
+        active |= ((px < c.width && py < c.height) as Mask) << l;
+    }
+    let mut d = [[0.0f32; LANES]; 3];
+    for l in 0..LANES {
+        let fi = (i + l as u32 % PACKET_W) as f32;
+        let fj = (j + l as u32 / PACKET_W) as f32;
+        let x = ((fi + half) / c.width as f32 * two - 1.0) * c.tan_half * c.aspect;
+        let y = (1.0 - (fj + half) / c.height as f32 * two) * c.tan_half;
+        d[0][l] = c.forward.x + c.right.x * x + c.up.x * y;
+        d[1][l] = c.forward.y + c.right.y * x + c.up.y * y;
+        d[2][l] = c.forward.z + c.right.z * x + c.up.z * y;
+    }
+    let mut n = [[0.0f32; LANES]; 3];
+    for l in 0..LANES {
+        let len = (d[0][l] * d[0][l] + d[1][l] * d[1][l] + d[2][l] * d[2][l]).sqrt();
+        n[0][l] = d[0][l] / len;
+        n[1][l] = d[1][l] / len;
+        n[2][l] = d[2][l] / len;
+    }
+    let rays = std::array::from_fn(|l| Ray {
+        origin: c.eye,
+        dir: V3::new(n[0][l], n[1][l], n[2][l]),
+    });
+    (rays, active)
+}
+
+#[inline(always)]
+fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
+    let (rays, active) = camera_rays(g, i, j);
+    let hits = closest_hit_packet(g, &rays, active, 0.0, f32::MAX);
+    let mut lit: Mask = 0;
+    for l in 0..LANES {
+        lit |= ((hits[l].prim != PRIM_NONE) as Mask) << l;
+    }
+    let colors = shade_lanes(g, &rays, &hits, lit & active);
+    std::array::from_fn(|l| {
+        let hit = &hits[l];
+        if hit.prim == PRIM_NONE {
+            let bg = g.buf.params.background;
+            return [bg[0], bg[1], bg[2], -1.0];
+        }
+        [colors[0][l], colors[1][l], colors[2][l], hit.t]
+    })
+}
+
+/// `a · b` of lane l, left to right as `V3::dot`.
+#[inline(always)]
+fn dot_lane(a: &[[f32; LANES]; 3], b: &[[f32; LANES]; 3], l: usize) -> f32 {
+    a[0][l] * b[0][l] + a[1][l] * b[1][l] + a[2][l] * b[2][l]
+}
+
+/// `V3::normalize` of every lane.
+#[inline(always)]
+fn normalize_lanes(v: &[[f32; LANES]; 3]) -> [[f32; LANES]; 3] {
+    let mut out = [[0.0f32; LANES]; 3];
+    for l in 0..LANES {
+        let len = dot_lane(v, v, l).sqrt();
+        out[0][l] = v[0][l] / len;
+        out[1][l] = v[1][l] / len;
+        out[2][l] = v[2][l] / len;
+    }
+    out
+}
+
+/// `shade` for the lanes in `mask`, which must all hit something: the same operations in
+/// the same order, lane by lane, with the square roots, divisions and the exponent's
+/// squarings as lane loops. Shadow rays and non-integer exponents go lane by lane
+/// through the mirror's own `occluded` and `phong_power`. Lanes outside `mask` compute
+/// lane `mask`'s first lane's values, which are not used.
+#[inline(always)]
+fn shade_lanes(
+    g: &Globals<f32>,
+    rays: &[Ray<f32>; LANES],
+    hits: &[Hit<f32>; LANES],
+    mask: Mask,
+) -> [[f32; LANES]; 3] {
+    let mut color = [[0.0f32; LANES]; 3];
+    if mask == 0 {
+        return color;
+    }
+    let first = mask.trailing_zeros() as usize;
+    let src = |l: usize| if (mask >> l) & 1 != 0 { l } else { first };
+    let mats: [&Material; LANES] =
+        std::array::from_fn(|l| &g.buf.materials[hit_material(g, &hits[src(l)]) as usize]);
+    let o = g.cam.eye;
+    let mut p = [[0.0f32; LANES]; 3];
+    let mut nv = [[0.0f32; LANES]; 3];
+    let mut dir = [[0.0f32; LANES]; 3];
+    for l in 0..LANES {
+        let (ray, hit) = (&rays[src(l)], &hits[src(l)]);
+        dir[0][l] = ray.dir.x;
+        dir[1][l] = ray.dir.y;
+        dir[2][l] = ray.dir.z;
+        p[0][l] = o.x + ray.dir.x * hit.t;
+        p[1][l] = o.y + ray.dir.y * hit.t;
+        p[2][l] = o.z + ray.dir.z * hit.t;
+        // `surface_normal` before its normalize.
+        if (hit.prim & TRIANGLE_BIT) != 0 {
+            let tri = &g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize];
+            let e1 = [0, 1, 2].map(|k| tri.b[k] - tri.a[k]);
+            let e2 = [0, 1, 2].map(|k| tri.c[k] - tri.a[k]);
+            nv[0][l] = e1[1] * e2[2] - e1[2] * e2[1];
+            nv[1][l] = e1[2] * e2[0] - e1[0] * e2[2];
+            nv[2][l] = e1[0] * e2[1] - e1[1] * e2[0];
+        } else {
+            let c = g.buf.spheres[hit.prim as usize].center;
+            nv[0][l] = p[0][l] - c[0];
+            nv[1][l] = p[1][l] - c[1];
+            nv[2][l] = p[2][l] - c[2];
+        }
+    }
+    let mut n = normalize_lanes(&nv);
+    let ambient = g.buf.params.ambient;
+    let mut diffuse: Mask = 0;
+    for l in 0..LANES {
+        if dot_lane(&n, &dir, l) > 0.0 {
+            n[0][l] = -n[0][l];
+            n[1][l] = -n[1][l];
+            n[2][l] = -n[2][l];
+        }
+        for k in 0..3 {
+            color[k][l] = ambient[k] * mats[l].ka[k];
+        }
+        diffuse |= ((mats[l].model != MODEL_AMBIENT) as Mask) << l;
+    }
+    diffuse &= mask;
+    if g.spec.uses_diffuse && diffuse != 0 {
+        let mut to_eye = [[0.0f32; LANES]; 3];
+        for l in 0..LANES {
+            to_eye[0][l] = o.x - p[0][l];
+            to_eye[1][l] = o.y - p[1][l];
+            to_eye[2][l] = o.z - p[2][l];
+        }
+        let v = normalize_lanes(&to_eye);
+        for k in 0..g.buf.params.n_lights {
+            let light: &Light = &g.buf.lights[k as usize];
+            let position = light.position;
+            let light_color = light.color;
+            let mut to_light = [[0.0f32; LANES]; 3];
+            for l in 0..LANES {
+                to_light[0][l] = position[0] - p[0][l];
+                to_light[1][l] = position[1] - p[1][l];
+                to_light[2][l] = position[2] - p[2][l];
+            }
+            let lv = normalize_lanes(&to_light);
+            let mut ndl = [0.0f32; LANES];
+            let mut on: Mask = 0;
+            for l in 0..LANES {
+                ndl[l] = dot_lane(&n, &lv, l);
+                on |= ((ndl[l] > 0.0) as Mask) << l;
+            }
+            on &= diffuse;
+            if g.spec.shadows {
+                let mut m = on;
+                while m != 0 {
+                    let l = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let pl = V3::new(p[0][l], p[1][l], p[2][l]);
+                    let nl = V3::new(n[0][l], n[1][l], n[2][l]);
+                    let so = shadow_origin(pl, nl);
+                    let d = V3::from(position) - so;
+                    let shadow = Ray { origin: so, dir: d };
+                    if occluded(g, shadow, 0.0, 1.0, hits[l].prim) {
+                        on &= !(1 << l);
+                    }
+                }
+            }
+            for l in 0..LANES {
+                if (on >> l) & 1 != 0 {
+                    for c in 0..3 {
+                        color[c][l] += light_color[c] * mats[l].kd[c] * ndl[l];
+                    }
+                }
+            }
+            let mut phong: Mask = 0;
+            for l in 0..LANES {
+                phong |= ((mats[l].model == MODEL_PHONG) as Mask) << l;
+            }
+            phong &= on;
+            if g.spec.uses_phong && phong != 0 {
+                let two = 1.0f32 + 1.0;
+                let mut rv = [0.0f32; LANES];
+                for l in 0..LANES {
+                    let r = [0, 1, 2].map(|c| n[c][l] * (two * ndl[l]) - lv[c][l]);
+                    rv[l] = max0(r[0] * v[0][l] + r[1] * v[1][l] + r[2] * v[2][l]);
+                }
+                let pw = phong_power_lanes(&rv, &mats, phong);
+                for l in 0..LANES {
+                    if (phong >> l) & 1 != 0 {
+                        for c in 0..3 {
+                            color[c][l] += light_color[c] * mats[l].ks[c] * pw[l];
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for c in 0..3 {
+        for l in 0..LANES {
+            color[c][l] = clamp01(color[c][l]);
+        }
+    }
+    color
+}
+
+/// `phong_power` of every lane in `mask`: integer exponents by squaring as lane loops (a
+/// lane whose exponent is spent multiplies no further, as the scalar loop stops), other
+/// exponents through `phong_power` itself.
+#[inline(always)]
+fn phong_power_lanes(base: &[f32; LANES], mats: &[&Material; LANES], mask: Mask) -> [f32; LANES] {
+    let mut result = [1.0f32; LANES];
+    let mut b = *base;
+    let mut e = [0u32; LANES];
+    for l in 0..LANES {
+        if (mask >> l) & 1 != 0 {
+            if mats[l].n_int < 0 {
+                result[l] = phong_power(base[l], mats[l]);
+            } else {
+                e[l] = mats[l].n_int as u32;
+            }
+        }
+    }
+    for _ in 0..32 {
+        if e.iter().all(|&x| x == 0) {
+            break;
+        }
+        for l in 0..LANES {
+            result[l] = if (e[l] & 1) != 0 {
+                result[l] * b[l]
+            } else {
+                result[l]
+            };
+            b[l] = b[l] * b[l];
+            e[l] >>= 1;
+        }
+    }
+    result
+}

@@ -1,0 +1,173 @@
+//! The CPU's packet tracer (`src/cpu/packet.rs`, what `render_f32` runs through the BVH)
+//! against the mirror it must equal: every f32 bit of every pixel the same as
+//! `render_f32_mirror` (one `trace_pixel` per pixel), on seed scenes with the BVH forced
+//! on, on real meshes with each triangle algorithm, with and without shadows, on random
+//! scenes, and on image sizes that cut packets at the right and bottom edges.
+
+mod common;
+
+use std::path::Path;
+
+use common::{Rng, random_scene, seed_scene};
+use glint::buffers::{SceneBuffers, Specialisation};
+use glint::image::Image;
+use glint::scene::{Scene, TriangleAlgorithm};
+
+const ALGOS: [TriangleAlgorithm; 3] = [
+    TriangleAlgorithm::Naive,
+    TriangleAlgorithm::MollerTrumbore,
+    TriangleAlgorithm::Watertight,
+];
+
+/// Ok when the two images are equal in every bit; else where they first differ.
+fn same_bits(packets: &Image, mirror: &Image) -> Result<(), String> {
+    if (packets.width, packets.height) != (mirror.width, mirror.height) {
+        return Err("the images differ in size".into());
+    }
+    let differing: Vec<usize> = (0..mirror.pixels.len())
+        .filter(|&k| packets.pixels[k].map(f32::to_bits) != mirror.pixels[k].map(f32::to_bits))
+        .collect();
+    match differing.first() {
+        None => Ok(()),
+        Some(&k) => Err(format!(
+            "{} pixels differ; first ({}, {}): packets {:?}, mirror {:?}",
+            differing.len(),
+            k % mirror.width as usize,
+            k / mirror.width as usize,
+            packets.pixels[k],
+            mirror.pixels[k]
+        )),
+    }
+}
+
+/// Both CPU f32 renders of `buf` through the BVH, compared; Err names `what`.
+fn check(what: &str, buf: &SceneBuffers, spec: Specialisation) -> Result<usize, String> {
+    let spec = spec.with_bvh(true);
+    let packets = glint::cpu::render_f32(buf, spec);
+    let mirror = glint::cpu::render_f32_mirror(buf, spec);
+    same_bits(&packets, &mirror).map_err(|e| format!("{what}: {e}"))?;
+    Ok(mirror.hit_count())
+}
+
+#[test]
+fn seed_scenes_through_the_bvh_equal_the_mirror() {
+    for name in common::SEED_SCENES {
+        let scene = seed_scene(name);
+        for algo in ALGOS {
+            // 37×23: neither side a multiple of the 4×2 packet.
+            let buf = SceneBuffers::new(&scene, 37, 23, algo);
+            let hits = check(
+                &format!("{name} {algo:?}"),
+                &buf,
+                Specialisation::for_scene(&buf),
+            )
+            .unwrap_or_else(|e| panic!("{e}"));
+            assert!(
+                hits > 0,
+                "{name}: nothing was hit, the test would prove little"
+            );
+        }
+    }
+}
+
+/// A scene of one of the small test meshes with two lights, shadows on or off.
+fn mesh_scene(mesh: &str, shadows: bool) -> Scene {
+    // The dragon is about 0.2 units tall where the others are about 2.
+    let place = if mesh == "dragon_res4" {
+        "scale = [12.0, 12.0, 12.0]\ntranslate = [0.0, -1.3, 0.0]"
+    } else {
+        ""
+    };
+    let src = format!(
+        r#"
+ambient = [0.2, 0.2, 0.2]
+shadows = {shadows}
+[camera]
+eye = [0.3, 0.4, 4.0]
+look_at = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov = 40.0
+width = 64
+height = 48
+[[lights]]
+position = [-3.0, 4.0, 5.0]
+color = [0.7, 0.7, 0.6]
+[[lights]]
+position = [4.0, 1.0, 2.0]
+color = [0.3, 0.3, 0.4]
+[materials.m]
+model = "phong"
+ka = [0.3, 0.2, 0.1]
+kd = [0.6, 0.5, 0.4]
+ks = [0.5, 0.5, 0.5]
+n = 20.0
+[[meshes]]
+file = "{mesh}.obj"
+material = "m"
+{place}
+"#
+    );
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/meshes");
+    Scene::parse(&src, &dir.join(format!("{mesh}.toml"))).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn meshes_equal_the_mirror_with_every_triangle_algorithm() {
+    for mesh in ["teapot_npm", "bunny_npm", "suzanne", "dragon_res4"] {
+        for shadows in [false, true] {
+            let scene = mesh_scene(mesh, shadows);
+            for algo in ALGOS {
+                let buf = SceneBuffers::new(&scene, 61, 45, algo);
+                let what = format!("{mesh} {algo:?} shadows={shadows}");
+                let hits = check(&what, &buf, Specialisation::for_scene(&buf))
+                    .unwrap_or_else(|e| panic!("{e}"));
+                assert!(hits > 100, "{what}: only {hits} pixels hit");
+            }
+        }
+    }
+}
+
+#[test]
+fn random_scenes_equal_the_mirror() {
+    let mut rng = Rng::new(0x9ac4e7);
+    let mut tested = 0;
+    while tested < 40 {
+        let src = random_scene(&mut rng);
+        let Ok(scene) = Scene::parse(&src, Path::new("random.toml")) else {
+            continue;
+        };
+        tested += 1;
+        let buf = SceneBuffers::new(&scene, 45, 31, scene.triangle);
+        check(
+            &format!("random scene #{tested}:\n{src}"),
+            &buf,
+            Specialisation::for_scene(&buf),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+#[test]
+fn packets_cut_by_the_image_edges_equal_the_mirror() {
+    let scene = mesh_scene("suzanne", false);
+    for (w, h) in [(1, 1), (3, 1), (1, 3), (5, 3), (4, 2), (9, 7)] {
+        let buf = SceneBuffers::new(&scene, w, h, TriangleAlgorithm::Watertight);
+        check(&format!("{w}x{h}"), &buf, Specialisation::for_scene(&buf))
+            .unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+/// The twin: the comparison fails when one bit of one channel of one pixel changes.
+#[test]
+fn a_one_bit_change_fails_the_comparison() {
+    let scene = mesh_scene("suzanne", false);
+    let buf = SceneBuffers::new(&scene, 61, 45, TriangleAlgorithm::Watertight);
+    let spec = Specialisation::for_scene(&buf).with_bvh(true);
+    let mirror = glint::cpu::render_f32_mirror(&buf, spec);
+    let mut packets = glint::cpu::render_f32(&buf, spec);
+    assert!(same_bits(&packets, &mirror).is_ok());
+    let k = packets.pixels.len() / 2 + 7;
+    packets.pixels[k][1] = f32::from_bits(packets.pixels[k][1].to_bits() ^ 1);
+    let err = same_bits(&packets, &mirror).expect_err("a flipped bit must fail");
+    assert!(err.contains("1 pixels differ"), "{err}");
+}
