@@ -27,6 +27,7 @@ use crate::buffers::{
 
 /// Rays per packet.
 pub const LANES: usize = 8;
+const _: () = assert!(LANES == 8, "mask_of gathers exactly eight flags");
 /// Packet width in pixels (the packet is `PACKET_W` × `PACKET_H`).
 pub const PACKET_W: u32 = 4;
 /// Packet height in pixels.
@@ -94,11 +95,16 @@ fn box_lanes(
         near_out[l] = t0;
         hit[l] = t0 <= t1;
     }
-    let mut m: Mask = 0;
-    for (l, &h) in hit.iter().enumerate() {
-        m |= (h as Mask) << l;
-    }
-    m
+    mask_of(&hit)
+}
+
+/// The bits of eight flags, lane l in bit l. Branch-free: the flags as bytes (0 or 1)
+/// times 0x0102040810204080 puts byte l's bit in bit 56 + l, and no two partial products
+/// share a bit, so nothing carries.
+#[inline(always)]
+fn mask_of(flags: &[bool; LANES]) -> Mask {
+    let bytes: [u8; LANES] = flags.map(|f| f as u8);
+    (u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56) as Mask
 }
 
 /// The lanes' `Shear`s as structure of arrays.
@@ -187,7 +193,7 @@ fn watertight_lanes(
     let c = [tri.c[0] - o.x, tri.c[1] - o.y, tri.c[2] - o.z];
     let mut e = [[0.0f32; LANES]; 3];
     let mut xy = [[0.0f32; LANES]; 6];
-    let mut zero: Mask = 0;
+    let mut zero_flags = [false; LANES];
     for l in 0..LANES {
         let (kx, ky, kz) = (sh.kx[l], sh.ky[l], sh.kz[l]);
         let ax = pick(&a, kx) - sh.sx[l] * pick(&a, kz);
@@ -205,9 +211,9 @@ fn watertight_lanes(
         xy[3][l] = by;
         xy[4][l] = cx;
         xy[5][l] = cy;
-        let z = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
-        zero |= (z as Mask) << l;
+        zero_flags[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
     }
+    let zero = mask_of(&zero_flags);
     let mut fix = zero & mask;
     while fix != 0 {
         let l = fix.trailing_zeros() as usize;
@@ -241,6 +247,34 @@ fn watertight_lanes(
         out.v[l] = if hit { w * inv_det } else { 0.0 };
     }
     out
+}
+
+/// Asks the cache for what a step at `node` will read next: its far child's box (the
+/// near one sits right after it), or its first primitive's triangle. Only a hint: no
+/// value depends on it.
+#[inline(always)]
+fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let count = node.count_axis >> 2;
+        if count == 0 {
+            let p = g.buf.nodes.as_ptr().wrapping_add(node.first as usize) as *const i8;
+            // SAFETY: a prefetch reads nothing and cannot fault, whatever the address.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
+            return;
+        }
+        let ids = g
+            .buf
+            .prim_ids
+            .get(node.first as usize..(node.first + count) as usize);
+        for &id in ids.unwrap_or(&[]) {
+            let k = (id & !TRIANGLE_BIT) as usize;
+            let p = g.buf.triangles.as_ptr().wrapping_add(k) as *const i8;
+            // SAFETY: as above.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
+        }
+    }
 }
 
 /// `closest_hit_bvh` for the rays of `rays` whose bit is set in `active` (the others are
@@ -321,15 +355,19 @@ pub fn closest_hit_packet(
                     at += 1;
                     mask = ml;
                 }
+                prefetch_children(g, left);
+                prefetch_children(g, right);
                 sp += 1;
                 continue;
             }
             if ml != 0 {
+                prefetch_children(g, left);
                 at += 1;
                 mask = ml;
                 continue;
             }
             if mr != 0 {
+                prefetch_children(g, right);
                 at = node.first;
                 mask = mr;
                 continue;
@@ -567,12 +605,12 @@ fn shade_lanes(
             }
             let lv = normalize_lanes(&to_light);
             let mut ndl = [0.0f32; LANES];
-            let mut on: Mask = 0;
+            let mut on_flags = [false; LANES];
             for l in 0..LANES {
                 ndl[l] = dot_lane(&n, &lv, l);
-                on |= ((ndl[l] > 0.0) as Mask) << l;
+                on_flags[l] = ndl[l] > 0.0;
             }
-            on &= diffuse;
+            let mut on = mask_of(&on_flags) & diffuse;
             if g.spec.shadows {
                 let mut m = on;
                 while m != 0 {
@@ -604,8 +642,10 @@ fn shade_lanes(
                 let two = 1.0f32 + 1.0;
                 let mut rv = [0.0f32; LANES];
                 for l in 0..LANES {
-                    let r = [0, 1, 2].map(|c| n[c][l] * (two * ndl[l]) - lv[c][l]);
-                    rv[l] = max0(r[0] * v[0][l] + r[1] * v[1][l] + r[2] * v[2][l]);
+                    let rx = n[0][l] * (two * ndl[l]) - lv[0][l];
+                    let ry = n[1][l] * (two * ndl[l]) - lv[1][l];
+                    let rz = n[2][l] * (two * ndl[l]) - lv[2][l];
+                    rv[l] = max0(rx * v[0][l] + ry * v[1][l] + rz * v[2][l]);
                 }
                 let pw = phong_power_lanes(&rv, &mats, phong);
                 for l in 0..LANES {
