@@ -223,6 +223,10 @@ pub struct SceneBuffers {
     pub nodes: Vec<BvhNode>,
     /// Primitive ids in BVH leaf order.
     pub prim_ids: Vec<u32>,
+    /// For the CPU only: `triangles[prim_ids[k]]` at k (a zeroed triangle where a sphere
+    /// is), so that the packet tracer reads a leaf's triangles from consecutive memory.
+    /// Derived by [`SceneBuffers::assemble`]; the GPU never sees it.
+    pub leaf_triangles: Vec<Triangle>,
     /// The triangle algorithm (`TRIANGLE_*`).
     pub triangle_algo: u32,
     /// Whether shadow rays are traced.
@@ -335,6 +339,17 @@ impl SceneBuffers {
         shadows: bool,
     ) -> Self {
         let bvh = Bvh::build(&spheres, &triangles);
+        let leaf_triangles = bvh
+            .prim_ids
+            .iter()
+            .map(|&id| {
+                if (id & TRIANGLE_BIT) != 0 {
+                    triangles[(id & !TRIANGLE_BIT) as usize]
+                } else {
+                    Triangle::default()
+                }
+            })
+            .collect();
         SceneBuffers {
             params: Params {
                 n_spheres: spheres.len() as u32,
@@ -349,6 +364,7 @@ impl SceneBuffers {
             lights,
             nodes: bvh.nodes,
             prim_ids: bvh.prim_ids,
+            leaf_triangles,
             triangle_algo: algo.code(),
             shadows,
         }

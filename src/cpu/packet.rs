@@ -174,6 +174,21 @@ fn pick(v: &[f32; 3], k: u32) -> f32 {
     }
 }
 
+/// The sheared vertices (ax, ay, bx, by, cx, cy) of `hit_triangle_watertight` for lane l,
+/// from the vertices relative to the origin.
+#[inline(always)]
+fn sheared(a: &[f32; 3], b: &[f32; 3], c: &[f32; 3], sh: &ShearLanes, l: usize) -> [f32; 6] {
+    let (kx, ky, kz) = (sh.kx[l], sh.ky[l], sh.kz[l]);
+    [
+        pick(a, kx) - sh.sx[l] * pick(a, kz),
+        pick(a, ky) - sh.sy[l] * pick(a, kz),
+        pick(b, kx) - sh.sx[l] * pick(b, kz),
+        pick(b, ky) - sh.sy[l] * pick(b, kz),
+        pick(c, kx) - sh.sx[l] * pick(c, kz),
+        pick(c, ky) - sh.sy[l] * pick(c, kz),
+    ]
+}
+
 /// `hit_triangle_watertight` of one triangle for every lane, with lane l's `t_max` =
 /// `t_max[l]`: the same operations in the same order, lane by lane. An edge function
 /// that comes out exactly 0 is recomputed by `edge_function` itself (its exact
@@ -192,25 +207,12 @@ fn watertight_lanes(
     let b = [tri.b[0] - o.x, tri.b[1] - o.y, tri.b[2] - o.z];
     let c = [tri.c[0] - o.x, tri.c[1] - o.y, tri.c[2] - o.z];
     let mut e = [[0.0f32; LANES]; 3];
-    let mut xy = [[0.0f32; LANES]; 6];
     let mut zero_flags = [false; LANES];
     for l in 0..LANES {
-        let (kx, ky, kz) = (sh.kx[l], sh.ky[l], sh.kz[l]);
-        let ax = pick(&a, kx) - sh.sx[l] * pick(&a, kz);
-        let ay = pick(&a, ky) - sh.sy[l] * pick(&a, kz);
-        let bx = pick(&b, kx) - sh.sx[l] * pick(&b, kz);
-        let by = pick(&b, ky) - sh.sy[l] * pick(&b, kz);
-        let cx = pick(&c, kx) - sh.sx[l] * pick(&c, kz);
-        let cy = pick(&c, ky) - sh.sy[l] * pick(&c, kz);
+        let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
         e[0][l] = cx * by - cy * bx;
         e[1][l] = ax * cy - ay * cx;
         e[2][l] = bx * ay - by * ax;
-        xy[0][l] = ax;
-        xy[1][l] = ay;
-        xy[2][l] = bx;
-        xy[3][l] = by;
-        xy[4][l] = cx;
-        xy[5][l] = cy;
         zero_flags[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
     }
     let zero = mask_of(&zero_flags);
@@ -218,7 +220,7 @@ fn watertight_lanes(
     while fix != 0 {
         let l = fix.trailing_zeros() as usize;
         fix &= fix - 1;
-        let [ax, ay, bx, by, cx, cy] = [0, 1, 2, 3, 4, 5].map(|k| xy[k][l]);
+        let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
         e[0][l] = edge_function(cx, by, cy, bx);
         e[1][l] = edge_function(ax, cy, ay, cx);
         e[2][l] = edge_function(bx, ay, by, ax);
@@ -264,15 +266,15 @@ fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
             unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
             return;
         }
-        let ids = g
+        // A leaf's triangles are consecutive in `leaf_triangles`, 48 bytes each.
+        let first = g
             .buf
-            .prim_ids
-            .get(node.first as usize..(node.first + count) as usize);
-        for &id in ids.unwrap_or(&[]) {
-            let k = (id & !TRIANGLE_BIT) as usize;
-            let p = g.buf.triangles.as_ptr().wrapping_add(k) as *const i8;
+            .leaf_triangles
+            .as_ptr()
+            .wrapping_add(node.first as usize) as *const i8;
+        for line in 0..(count as usize * 48).div_ceil(64) {
             // SAFETY: as above.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(64 * line)) };
         }
     }
 }
@@ -376,7 +378,7 @@ pub fn closest_hit_packet(
             for k in node.first..node.first + count {
                 let id = g.buf.prim_ids[k as usize];
                 if lane_triangles && (id & TRIANGLE_BIT) != 0 {
-                    let tri = &g.buf.triangles[(id & !TRIANGLE_BIT) as usize];
+                    let tri = &g.buf.leaf_triangles[k as usize];
                     let h = watertight_lanes(tri, &r, &sh, mask, t_min, &bound);
                     let mut m = mask;
                     while m != 0 {
