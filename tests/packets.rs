@@ -72,6 +72,11 @@ fn seed_scenes_through_the_bvh_equal_the_mirror() {
 
 /// A scene of one of the small test meshes with two lights, shadows on or off.
 fn mesh_scene(mesh: &str, shadows: bool) -> Scene {
+    mesh_scene_n(mesh, shadows, 20.0)
+}
+
+/// `mesh_scene` with Phong exponent `n`.
+fn mesh_scene_n(mesh: &str, shadows: bool, n: f32) -> Scene {
     // The dragon is about 0.2 units tall where the others are about 2.
     let place = if mesh == "dragon_res4" {
         "scale = [12.0, 12.0, 12.0]\ntranslate = [0.0, -1.3, 0.0]"
@@ -100,7 +105,7 @@ model = "phong"
 ka = [0.3, 0.2, 0.1]
 kd = [0.6, 0.5, 0.4]
 ks = [0.5, 0.5, 0.5]
-n = 20.0
+n = {n:?}
 [[meshes]]
 file = "{mesh}.obj"
 material = "m"
@@ -154,6 +159,19 @@ fn packets_cut_by_the_image_edges_equal_the_mirror() {
         let buf = SceneBuffers::new(&scene, w, h, TriangleAlgorithm::Watertight);
         check(&format!("{w}x{h}"), &buf, Specialisation::for_scene(&buf))
             .unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+/// A non-integer exponent goes through `pow` lane by lane, an exponent of 0 gives 1.
+#[test]
+fn other_exponents_equal_the_mirror() {
+    for n in [12.5, 0.0, 1.0, 255.0] {
+        for shadows in [false, true] {
+            let scene = mesh_scene_n("teapot_npm", shadows, n);
+            let buf = SceneBuffers::new(&scene, 33, 27, TriangleAlgorithm::Watertight);
+            check(&format!("n = {n}"), &buf, Specialisation::for_scene(&buf))
+                .unwrap_or_else(|e| panic!("{e}"));
+        }
     }
 }
 
