@@ -1,8 +1,9 @@
-//! The CPU's packet tracer (`src/cpu/packet.rs`, what `render_f32` runs through the BVH)
+//! The CPU's packet tracer (`src/cpu/packet.rs`, what `render_f32` runs)
 //! against the mirror it must equal: every f32 bit of every pixel the same as
-//! `render_f32_mirror` (one `trace_pixel` per pixel), on seed scenes with the BVH forced
-//! on, on real meshes with each triangle algorithm, with and without shadows, on random
-//! scenes, and on image sizes that cut packets at the right and bottom edges.
+//! `render_f32_mirror` (one `trace_pixel` per pixel), on the seed scenes and random scenes
+//! both through the BVH and testing every primitive, on real meshes with each triangle
+//! algorithm, with and without shadows, and on image sizes that cut packets at the right
+//! and bottom edges.
 
 mod common;
 
@@ -42,30 +43,33 @@ fn same_bits(packets: &Image, mirror: &Image) -> Result<(), String> {
 
 /// Both CPU f32 renders of `buf` through the BVH, compared; Err names `what`.
 fn check(what: &str, buf: &SceneBuffers, spec: Specialisation) -> Result<usize, String> {
-    let spec = spec.with_bvh(true);
+    check_as(what, buf, spec.with_bvh(true))
+}
+
+/// Both CPU f32 renders of `buf` as `spec` says (BVH or every primitive), compared.
+fn check_as(what: &str, buf: &SceneBuffers, spec: Specialisation) -> Result<usize, String> {
     let packets = glint::cpu::render_f32(buf, spec);
     let mirror = glint::cpu::render_f32_mirror(buf, spec);
-    same_bits(&packets, &mirror).map_err(|e| format!("{what}: {e}"))?;
+    same_bits(&packets, &mirror).map_err(|e| format!("{what} (BVH: {}): {e}", spec.use_bvh))?;
     Ok(mirror.hit_count())
 }
 
 #[test]
-fn seed_scenes_through_the_bvh_equal_the_mirror() {
+fn seed_scenes_equal_the_mirror_with_and_without_the_bvh() {
     for name in common::SEED_SCENES {
         let scene = seed_scene(name);
         for algo in ALGOS {
             // 37×23: neither side a multiple of the 4×2 packet.
             let buf = SceneBuffers::new(&scene, 37, 23, algo);
-            let hits = check(
-                &format!("{name} {algo:?}"),
-                &buf,
-                Specialisation::for_scene(&buf),
-            )
-            .unwrap_or_else(|e| panic!("{e}"));
-            assert!(
-                hits > 0,
-                "{name}: nothing was hit, the test would prove little"
-            );
+            for bvh in [true, false] {
+                let spec = Specialisation::for_scene(&buf).with_bvh(bvh);
+                let hits = check_as(&format!("{name} {algo:?}"), &buf, spec)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                assert!(
+                    hits > 0,
+                    "{name}: nothing was hit, the test would prove little"
+                );
+            }
         }
     }
 }
@@ -143,12 +147,11 @@ fn random_scenes_equal_the_mirror() {
         };
         tested += 1;
         let buf = SceneBuffers::new(&scene, 45, 31, scene.triangle);
-        check(
-            &format!("random scene #{tested}:\n{src}"),
-            &buf,
-            Specialisation::for_scene(&buf),
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
+        for bvh in [true, false] {
+            let spec = Specialisation::for_scene(&buf).with_bvh(bvh);
+            check_as(&format!("random scene #{tested}:\n{src}"), &buf, spec)
+                .unwrap_or_else(|e| panic!("{e}"));
+        }
     }
 }
 

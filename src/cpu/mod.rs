@@ -78,9 +78,9 @@ fn render_packets(g: &Globals<f32>, progress: &Progress<'_>) -> Image {
     }
 }
 
-/// Renders in f32 as the shader does, specialised as the GPU would be: through the BVH in
-/// packets (`packet.rs`), else pixel by pixel with the mirror's `trace_pixel`. The image
-/// is [`render_f32_mirror`]'s, bit for bit (`tests/packets.rs`).
+/// Renders in f32 as the shader does, specialised as the GPU would be, in packets of eight
+/// camera rays (`packet.rs`). The image is [`render_f32_mirror`]'s, bit for bit
+/// (`tests/packets.rs`).
 pub fn render_f32(buf: &SceneBuffers, spec: Specialisation) -> Image {
     render_f32_progress(buf, spec, &|_, _| {})
 }
@@ -96,10 +96,7 @@ pub fn render_f32_progress(
         buf,
         spec,
     };
-    if spec.use_bvh {
-        return render_packets(&g, progress);
-    }
-    render_with(&g, progress)
+    render_packets(&g, progress)
 }
 
 /// Renders with the f32 mirror of `trace.wgsl` itself, one `trace_pixel` per pixel: the

@@ -1,15 +1,18 @@
-//! The CPU's fast path for camera rays: eight rays (a 4×2 block of pixels) walk the BVH
-//! together, so that each node is fetched once for eight rays and its two child boxes
-//! are tested against all eight at once (the lane loops below are written for LLVM to
-//! vectorise).
+//! The CPU's fast path for camera rays: eight rays (a 4×2 block of pixels) are traced
+//! together. Through the BVH each node is fetched once for the eight and its two child
+//! boxes are tested against all eight at once; without it (small scenes) each primitive
+//! is tested against the eight at once. The lane loops below are written for LLVM to
+//! vectorise, and `trace_packet` is compiled a second time for AVX2.
 //!
 //! This is not a mirror of a WGSL function: it is the mirror's faster twin, and it gives
-//! the same image bit for bit. Per ray it runs the mirror's own code for everything that
-//! decides a value: `camera_ray`, `ray_shear`, `hit_prim` (with the ray's own
-//! `tie_bound`), `nearer` and `shade`. Only the order in which leaves are reached
-//! differs, and `closest_hit_bvh`'s result does not depend on that order: it is the hit
-//! with the smallest t and, of equal t, the lowest primitive id (what `closest_hit_all`
-//! keeps), because every box test is conservative for any bound past the nearest hit.
+//! the same image bit for bit. Lane by lane it does the mirror's operations in the
+//! mirror's order: `camera_ray`, `make_shear`, `box_interval`, the watertight test and
+//! `shade` are written again as lane loops, op for op; everything else (the other
+//! triangle tests, spheres, shadow rays, `pow`) calls the mirror's own functions one lane
+//! at a time. Only the order in which BVH leaves are reached differs, and
+//! `closest_hit_bvh`'s result does not depend on that order: it is the hit with the
+//! smallest t and, of equal t, the lowest primitive id (what `closest_hit_all` keeps),
+//! because every box test is conservative for any bound past the nearest hit.
 //! `tests/packets.rs` checks the two images against each other, bit for bit.
 
 // Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
@@ -18,7 +21,8 @@
 use super::real::V3;
 use super::trace::{
     BVH_STACK, Globals, Hit, Ray, Shear, clamp01, edge_function, hit_material, hit_prim,
-    in_interval, max0, nearer, occluded, phong_power, shadow_origin, tie_bound,
+    hit_sphere, hit_triangle, in_interval, max0, nearer, occluded, phong_power, shadow_origin,
+    tie_bound,
 };
 use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE,
@@ -155,6 +159,21 @@ fn shear_lanes(dir: &[[f32; LANES]; 3], watertight: bool) -> ShearLanes {
     sh
 }
 
+impl ShearLanes {
+    /// Lane l's `Shear`.
+    #[inline(always)]
+    fn lane(&self, l: usize) -> Shear<f32> {
+        Shear {
+            kx: self.kx[l],
+            ky: self.ky[l],
+            kz: self.kz[l],
+            sx: self.sx[l],
+            sy: self.sy[l],
+            sz: self.sz[l],
+        }
+    }
+}
+
 /// Each lane's (t, u, v), t = INFINITY on a miss.
 struct TriLanes {
     t: [f32; LANES],
@@ -279,8 +298,81 @@ fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
     }
 }
 
-/// `closest_hit_bvh` for the rays of `rays` whose bit is set in `active` (the others are
-/// returned as misses): the same hit for each ray as `closest_hit_bvh` gives it.
+/// `closest_hit_all` for every lane in `mask`, into `best` (misses at t_max): spheres
+/// then triangles in index order, each lane's t_max its own nearest t so far.
+#[inline(always)]
+fn closest_hit_all_lanes(
+    g: &Globals<f32>,
+    rays: &[Ray<f32>; LANES],
+    r: &Lanes,
+    sh: &ShearLanes,
+    mask: Mask,
+    t_min: f32,
+    best: &mut [Hit<f32>; LANES],
+) {
+    if g.spec.has_spheres {
+        for k in 0..g.buf.params.n_spheres {
+            let s = &g.buf.spheres[k as usize];
+            let mut m = mask;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let t = hit_sphere(rays[l], s, t_min, best[l].t);
+                if t < best[l].t {
+                    best[l] = Hit {
+                        t,
+                        prim: k,
+                        u: 0.0,
+                        v: 0.0,
+                    };
+                }
+            }
+        }
+    }
+    if g.spec.has_triangles {
+        let lanes = g.spec.triangle_algo == TRIANGLE_WATERTIGHT;
+        for k in 0..g.buf.params.n_triangles {
+            let tri = &g.buf.triangles[k as usize];
+            let h = if lanes {
+                let t_max: [f32; LANES] = std::array::from_fn(|l| best[l].t);
+                watertight_lanes(tri, r, sh, mask, t_min, &t_max)
+            } else {
+                let mut h = TriLanes {
+                    t: [INFINITY; LANES],
+                    u: [0.0; LANES],
+                    v: [0.0; LANES],
+                };
+                let mut m = mask;
+                while m != 0 {
+                    let l = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let shear = sh.lane(l);
+                    (h.t[l], h.u[l], h.v[l]) =
+                        hit_triangle(g, rays[l], shear, tri, t_min, best[l].t);
+                }
+                h
+            };
+            let mut m = mask;
+            while m != 0 {
+                let l = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if h.t[l] < best[l].t {
+                    best[l] = Hit {
+                        t: h.t[l],
+                        prim: k | TRIANGLE_BIT,
+                        u: h.u[l],
+                        v: h.v[l],
+                    };
+                }
+            }
+        }
+    }
+}
+
+/// `closest_hit` for the rays of `rays` whose bit is set in `active` (the others are
+/// returned as misses): the same hit for each ray as `closest_hit` gives it, through the
+/// BVH (`closest_hit_bvh`) or testing every primitive (`closest_hit_all`) as the
+/// specialisation says.
 /// Every ray must have `rays[0].origin` as its origin (camera rays do), and `t_max` must
 /// be finite (`finite_bound`), as `closest_hit` passes it.
 #[inline(always)]
@@ -298,8 +390,7 @@ pub fn closest_hit_packet(
         v: 0.0,
     };
     let mut best = [miss; LANES];
-    let nodes = &g.buf.nodes;
-    if g.buf.params.n_nodes == 0 || active == 0 {
+    if active == 0 {
         return best;
     }
     let mut dir = [[0.0f32; LANES]; 3];
@@ -322,6 +413,14 @@ pub fn closest_hit_packet(
     let watertight = g.spec.triangle_algo == TRIANGLE_WATERTIGHT;
     let lane_triangles = g.spec.has_triangles && watertight;
     let sh = shear_lanes(&dir, watertight);
+    if !g.spec.use_bvh {
+        closest_hit_all_lanes(g, rays, &r, &sh, active, t_min, &mut best);
+        return best;
+    }
+    let nodes = &g.buf.nodes;
+    if g.buf.params.n_nodes == 0 {
+        return best;
+    }
     let mut near_l = [0.0f32; LANES];
     let mut near_r = [0.0f32; LANES];
     let mut bound = [t_max; LANES];
@@ -400,15 +499,7 @@ pub fn closest_hit_packet(
                 while m != 0 {
                     let l = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    let shear = Shear {
-                        kx: sh.kx[l],
-                        ky: sh.ky[l],
-                        kz: sh.kz[l],
-                        sx: sh.sx[l],
-                        sy: sh.sy[l],
-                        sz: sh.sz[l],
-                    };
-                    let h = hit_prim(g, rays[l], shear, id, t_min, bound[l]);
+                    let h = hit_prim(g, rays[l], sh.lane(l), id, t_min, bound[l]);
                     if nearer(h.0, id, &best[l]) {
                         best[l] = Hit {
                             t: h.0,
@@ -432,7 +523,7 @@ pub fn closest_hit_packet(
 
 /// `trace_pixel` for the `PACKET_W` × `PACKET_H` block whose top-left pixel is (i, j),
 /// lane `dy * PACKET_W + dx` for pixel (i + dx, j + dy); pixels outside the image are
-/// left out. Needs `g.spec.use_bvh`.
+/// left out.
 pub fn trace_packet(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
