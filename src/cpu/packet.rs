@@ -20,9 +20,8 @@
 
 use super::real::V3;
 use super::trace::{
-    BVH_STACK, Globals, Hit, Ray, Shear, clamp01, edge_function, hit_material, hit_prim,
-    hit_sphere, hit_triangle, in_interval, max0, nearer, occluded, phong_power, shadow_origin,
-    tie_bound,
+    BVH_STACK, Globals, Hit, Ray, Shear, clamp01, edge_function, hit_prim, hit_sphere,
+    hit_triangle, in_interval, max0, nearer, occluded, phong_power, shadow_origin, tie_bound,
 };
 use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE,
@@ -38,7 +37,7 @@ pub const PACKET_W: u32 = 4;
 pub const PACKET_H: u32 = 2;
 
 /// A bit per lane.
-type Mask = u8;
+pub type Mask = u8;
 
 /// Rays from one origin, with their reciprocal directions as structure of arrays.
 struct Lanes {
@@ -275,6 +274,8 @@ fn watertight_lanes(
 /// value depends on it.
 #[inline(always)]
 fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (g, node);
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
@@ -369,6 +370,19 @@ fn closest_hit_all_lanes(
     }
 }
 
+/// Where a lane's hit triangle is when it was found in a BVH leaf: its index in
+/// `leaf_triangles`, else this.
+pub const NO_SLOT: u32 = u32::MAX;
+
+/// What `closest_hit_packet` finds.
+pub struct PacketHits {
+    /// Each lane's hit, as `closest_hit` gives it.
+    pub hits: [Hit<f32>; LANES],
+    /// Each lane's hit triangle's index in `leaf_triangles` (the same triangle as
+    /// `triangles[hit.prim]`, in memory the traversal has just read), or `NO_SLOT`.
+    pub slots: [u32; LANES],
+}
+
 /// `closest_hit` for the rays of `rays` whose bit is set in `active` (the others are
 /// returned as misses): the same hit for each ray as `closest_hit` gives it, through the
 /// BVH (`closest_hit_bvh`) or testing every primitive (`closest_hit_all`) as the
@@ -382,17 +396,22 @@ pub fn closest_hit_packet(
     active: Mask,
     t_min: f32,
     t_max: f32,
-) -> [Hit<f32>; LANES] {
+) -> PacketHits {
     let miss = Hit {
         t: t_max,
         prim: PRIM_NONE,
         u: 0.0,
         v: 0.0,
     };
-    let mut best = [miss; LANES];
+    let mut out = PacketHits {
+        hits: [miss; LANES],
+        slots: [NO_SLOT; LANES],
+    };
     if active == 0 {
-        return best;
+        return out;
     }
+    let best = &mut out.hits;
+    let slots = &mut out.slots;
     let mut dir = [[0.0f32; LANES]; 3];
     for l in 0..LANES {
         dir[0][l] = rays[l].dir.x;
@@ -414,19 +433,19 @@ pub fn closest_hit_packet(
     let lane_triangles = g.spec.has_triangles && watertight;
     let sh = shear_lanes(&dir, watertight);
     if !g.spec.use_bvh {
-        closest_hit_all_lanes(g, rays, &r, &sh, active, t_min, &mut best);
-        return best;
+        closest_hit_all_lanes(g, rays, &r, &sh, active, t_min, best);
+        return out;
     }
     let nodes = &g.buf.nodes;
     if g.buf.params.n_nodes == 0 {
-        return best;
+        return out;
     }
     let mut near_l = [0.0f32; LANES];
     let mut near_r = [0.0f32; LANES];
     let mut bound = [t_max; LANES];
     let mut mask = box_lanes(&nodes[0], &r, t_min, &bound, &mut near_l) & active;
     if mask == 0 {
-        return best;
+        return out;
     }
     let mut stack = [(0u32, 0 as Mask); BVH_STACK];
     let mut sp = 0usize;
@@ -491,6 +510,7 @@ pub fn closest_hit_packet(
                                 v: h.v[l],
                             };
                             bound[l] = tie_bound(&best[l]);
+                            slots[l] = k;
                         }
                     }
                     continue;
@@ -508,6 +528,7 @@ pub fn closest_hit_packet(
                             v: h.2,
                         };
                         bound[l] = tie_bound(&best[l]);
+                        slots[l] = k;
                     }
                 }
             }
@@ -518,7 +539,7 @@ pub fn closest_hit_packet(
         sp -= 1;
         (at, mask) = stack[sp];
     }
-    best
+    out
 }
 
 /// `trace_pixel` for the `PACKET_W` × `PACKET_H` block whose top-left pixel is (i, j),
@@ -581,12 +602,13 @@ pub fn camera_rays(g: &Globals<f32>, i: u32, j: u32) -> ([Ray<f32>; LANES], Mask
 #[inline(always)]
 fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
     let (rays, active) = camera_rays(g, i, j);
-    let hits = closest_hit_packet(g, &rays, active, 0.0, f32::MAX);
+    let found = closest_hit_packet(g, &rays, active, 0.0, f32::MAX);
+    let hits = &found.hits;
     let mut lit: Mask = 0;
     for l in 0..LANES {
         lit |= ((hits[l].prim != PRIM_NONE) as Mask) << l;
     }
-    let colors = shade_lanes(g, &rays, &hits, lit & active);
+    let colors = shade_lanes(g, &rays, &found, lit & active);
     std::array::from_fn(|l| {
         let hit = &hits[l];
         if hit.prim == PRIM_NONE {
@@ -625,17 +647,34 @@ fn normalize_lanes(v: &[[f32; LANES]; 3]) -> [[f32; LANES]; 3] {
 fn shade_lanes(
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
-    hits: &[Hit<f32>; LANES],
+    found: &PacketHits,
     mask: Mask,
 ) -> [[f32; LANES]; 3] {
+    let hits = &found.hits;
     let mut color = [[0.0f32; LANES]; 3];
     if mask == 0 {
         return color;
     }
     let first = mask.trailing_zeros() as usize;
     let src = |l: usize| if (mask >> l) & 1 != 0 { l } else { first };
-    let mats: [&Material; LANES] =
-        std::array::from_fn(|l| &g.buf.materials[hit_material(g, &hits[src(l)]) as usize]);
+    // The hit triangle, from where the traversal read it when it can (a cache hit).
+    let tri_of = |l: usize| -> &Triangle {
+        let slot = found.slots[l];
+        if slot != NO_SLOT {
+            return &g.buf.leaf_triangles[slot as usize];
+        }
+        &g.buf.triangles[(hits[l].prim & !TRIANGLE_BIT) as usize]
+    };
+    let mats: [&Material; LANES] = std::array::from_fn(|l| {
+        let hit = &hits[src(l)];
+        // `hit_material`.
+        let material = if (hit.prim & TRIANGLE_BIT) != 0 {
+            tri_of(src(l)).material
+        } else {
+            g.buf.spheres[hit.prim as usize].material
+        };
+        &g.buf.materials[material as usize]
+    });
     let o = g.cam.eye;
     let mut p = [[0.0f32; LANES]; 3];
     let mut nv = [[0.0f32; LANES]; 3];
@@ -650,7 +689,7 @@ fn shade_lanes(
         p[2][l] = o.z + ray.dir.z * hit.t;
         // `surface_normal` before its normalize.
         if (hit.prim & TRIANGLE_BIT) != 0 {
-            let tri = &g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize];
+            let tri = tri_of(src(l));
             let e1 = [0, 1, 2].map(|k| tri.b[k] - tri.a[k]);
             let e2 = [0, 1, 2].map(|k| tri.c[k] - tri.a[k]);
             nv[0][l] = e1[1] * e2[2] - e1[2] * e2[1];
