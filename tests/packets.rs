@@ -3,7 +3,8 @@
 //! `render_f32_mirror` (one `trace_pixel` per pixel), on the seed scenes and random scenes
 //! both through the BVH and testing every primitive, on real meshes with each triangle
 //! algorithm, with and without shadows, and on image sizes that cut packets at the right
-//! and bottom edges.
+//! and bottom edges; for both builds of the packet tracer (AVX2 where this CPU has it, and
+//! the baseline build a CPU without it runs).
 
 mod common;
 
@@ -47,10 +48,16 @@ fn check(what: &str, buf: &SceneBuffers, spec: Specialisation) -> Result<usize, 
 }
 
 /// Both CPU f32 renders of `buf` as `spec` says (BVH or every primitive), compared.
+/// The packet tracer's two builds (AVX2 where the CPU has it, and the baseline) are both
+/// checked.
 fn check_as(what: &str, buf: &SceneBuffers, spec: Specialisation) -> Result<usize, String> {
-    let packets = glint::cpu::render_f32(buf, spec);
     let mirror = glint::cpu::render_f32_mirror(buf, spec);
-    same_bits(&packets, &mirror).map_err(|e| format!("{what} (BVH: {}): {e}", spec.use_bvh))?;
+    let best = glint::cpu::render_f32(buf, spec);
+    let baseline = glint::cpu::render_f32_baseline(buf, spec);
+    for (build, packets) in [("best", &best), ("baseline", &baseline)] {
+        same_bits(packets, &mirror)
+            .map_err(|e| format!("{what} (BVH: {}, {build} build): {e}", spec.use_bvh))?;
+    }
     Ok(mirror.hit_count())
 }
 

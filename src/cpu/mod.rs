@@ -49,7 +49,7 @@ fn render_with<R: Real>(g: &Globals<R>, progress: &Progress<'_>) -> Image {
 
 /// Renders in packets of `packet::LANES` camera rays (blocks of `PACKET_W` × `PACKET_H`
 /// pixels, bands of `PACKET_H` rows in parallel): the same image as [`render_with`].
-fn render_packets(g: &Globals<f32>, progress: &Progress<'_>) -> Image {
+fn render_packets(g: &Globals<f32>, simd: packet::Simd, progress: &Progress<'_>) -> Image {
     let (w, h) = (g.cam.width, g.cam.height);
     let mut pixels = vec![[0.0f32; 4]; w as usize * h as usize];
     let done = AtomicU32::new(0);
@@ -60,7 +60,7 @@ fn render_packets(g: &Globals<f32>, progress: &Progress<'_>) -> Image {
         .for_each(|(b, rows)| {
             let j = b as u32 * packet::PACKET_H;
             for i in (0..w).step_by(packet::PACKET_W as usize) {
-                let px = packet::trace_packet(g, i, j);
+                let px = packet::trace_packet(g, i, j, simd);
                 for (l, c) in px.iter().enumerate() {
                     let (x, y) = (i + l as u32 % packet::PACKET_W, l as u32 / packet::PACKET_W);
                     if x < w && (y as usize) * (w as usize) < rows.len() {
@@ -96,7 +96,18 @@ pub fn render_f32_progress(
         buf,
         spec,
     };
-    render_packets(&g, progress)
+    render_packets(&g, packet::Simd::Best, progress)
+}
+
+/// [`render_f32`] with the packet tracer built for the baseline instruction set (what a
+/// CPU without AVX2 runs), for tests on machines that have it.
+pub fn render_f32_baseline(buf: &SceneBuffers, spec: Specialisation) -> Image {
+    let g = Globals {
+        cam: Camera::from_params(&buf.params),
+        buf,
+        spec,
+    };
+    render_packets(&g, packet::Simd::Baseline, &|_, _| {})
 }
 
 /// Renders with the f32 mirror of `trace.wgsl` itself, one `trace_pixel` per pixel: the

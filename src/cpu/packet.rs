@@ -542,12 +542,23 @@ pub fn closest_hit_packet(
     out
 }
 
+/// Which build of the packet tracer runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Simd {
+    /// The widest the CPU has (AVX2 on x86-64 when present).
+    Best,
+    /// The build for the target's baseline instruction set (SSE2 on x86-64), which a CPU
+    /// without AVX2 runs: tests check it too.
+    Baseline,
+}
+
 /// `trace_pixel` for the `PACKET_W` × `PACKET_H` block whose top-left pixel is (i, j),
 /// lane `dy * PACKET_W + dx` for pixel (i + dx, j + dy); pixels outside the image are
 /// left out.
-pub fn trace_packet(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
+/// `simd` picks the build: [`Simd::Best`] is AVX2 where the CPU has it.
+pub fn trace_packet(g: &Globals<f32>, i: u32, j: u32, simd: Simd) -> [[f32; 4]; LANES] {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if simd == Simd::Best && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2, checked just above.
         return unsafe { trace_packet_avx2(g, i, j) };
     }
