@@ -15,7 +15,11 @@ use glint::scene::Scene;
 /// 8 bits, never in hit/miss): an open finding. Scene #16: 8 pixels of a Phong sphere
 /// (n = 46) differ by up to 6e-7; scene #34: 2 pixels by up to 7.5e-8. The same arithmetic
 /// lifted into a probe shader matches Rust bit for bit, so the difference comes from the
-/// context lavapipe compiles it in; not yet explained.
+/// context lavapipe compiles it in; not yet explained. Narrowed (session 4): t is equal in
+/// every differing pixel and the three channels differ by the same relative amount, so
+/// it is a scalar factor of a light's term (N·L, or the specular power, which raises a
+/// one-ULP difference in R·V to the 46th power); and it is not fused multiply-add: the same
+/// pixels differ with `GALLIUM_OVERRIDE_CPU_CAPS=sse4.1` (no FMA, 128-bit lanes).
 const KNOWN_BIT_DIFFERENCES: usize = 2;
 
 #[test]

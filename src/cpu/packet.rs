@@ -557,6 +557,8 @@ pub enum Simd {
 /// left out.
 /// `simd` picks the build: [`Simd::Best`] is AVX2 where the CPU has it.
 pub fn trace_packet(g: &Globals<f32>, i: u32, j: u32, simd: Simd) -> [[f32; 4]; LANES] {
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = simd;
     #[cfg(target_arch = "x86_64")]
     if simd == Simd::Best && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2, checked just above.
