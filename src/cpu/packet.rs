@@ -20,8 +20,8 @@
 
 use super::real::V3;
 use super::trace::{
-    BVH_STACK, Globals, Hit, Ray, Shear, clamp01, edge_function, hit_prim, hit_sphere,
-    hit_triangle, in_interval, max0, nearer, occluded, phong_power, shadow_origin, tie_bound,
+    BVH_STACK, Globals, Hit, Ray, Shear, clamp01, edge_function, finite_bound, hit_prim,
+    hit_sphere, hit_triangle, in_interval, max0, nearer, phong_power, shadow_origin, tie_bound,
 };
 use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE,
@@ -39,38 +39,77 @@ pub const PACKET_H: u32 = 2;
 /// A bit per lane.
 pub type Mask = u8;
 
-/// Rays from one origin, with their reciprocal directions as structure of arrays.
-struct Lanes {
-    origin: V3<f32>,
+/// Where the lanes' rays start: `rel(p, l)` is `p - origin` of lane l, per component.
+trait Origins {
+    fn rel(&self, p: &[f32; 3], l: usize) -> [f32; 3];
+}
+
+/// One origin for every lane (camera rays): LLVM hoists `rel` out of the lane loops.
+struct Shared(V3<f32>);
+
+impl Origins for Shared {
+    #[inline(always)]
+    fn rel(&self, p: &[f32; 3], _l: usize) -> [f32; 3] {
+        [p[0] - self.0.x, p[1] - self.0.y, p[2] - self.0.z]
+    }
+}
+
+/// An origin per lane (shadow rays), as structure of arrays.
+struct PerLane([[f32; LANES]; 3]);
+
+impl Origins for PerLane {
+    #[inline(always)]
+    fn rel(&self, p: &[f32; 3], l: usize) -> [f32; 3] {
+        [
+            p[0] - self.0[0][l],
+            p[1] - self.0[1][l],
+            p[2] - self.0[2][l],
+        ]
+    }
+}
+
+/// Rays with their reciprocal directions as structure of arrays.
+struct Lanes<O> {
+    origin: O,
     ix: [f32; LANES],
     iy: [f32; LANES],
     iz: [f32; LANES],
+}
+
+impl<O> Lanes<O> {
+    /// The rays from `origin` with directions `dir` (structure of arrays).
+    #[inline(always)]
+    fn new(origin: O, dir: &[[f32; LANES]; 3]) -> Self {
+        let mut r = Lanes {
+            origin,
+            ix: [0.0; LANES],
+            iy: [0.0; LANES],
+            iz: [0.0; LANES],
+        };
+        for l in 0..LANES {
+            r.ix[l] = 1.0 / dir[0][l];
+            r.iy[l] = 1.0 / dir[1][l];
+            r.iz[l] = 1.0 / dir[2][l];
+        }
+        r
+    }
 }
 
 /// `box_interval` for every lane at once: the lanes whose ray meets `node`'s box in
 /// (t_min, bound), and each lane's entry distance. The same operations as
 /// `box_interval`, lane by lane.
 #[inline(always)]
-fn box_lanes(
+fn box_lanes<O: Origins>(
     node: &BvhNode,
-    r: &Lanes,
+    r: &Lanes<O>,
     t_min: f32,
     bound: &[f32; LANES],
     near_out: &mut [f32; LANES],
 ) -> Mask {
-    // `node.lo - origin` is the same for every lane: computed once.
-    let lo = [
-        node.lo[0] - r.origin.x,
-        node.lo[1] - r.origin.y,
-        node.lo[2] - r.origin.z,
-    ];
-    let hi = [
-        node.hi[0] - r.origin.x,
-        node.hi[1] - r.origin.y,
-        node.hi[2] - r.origin.z,
-    ];
     let mut hit = [false; LANES];
     for l in 0..LANES {
+        let lo = r.origin.rel(&node.lo, l);
+        let hi = r.origin.rel(&node.hi, l);
         let lx = lo[0] * r.ix[l];
         let ly = lo[1] * r.iy[l];
         let lz = lo[2] * r.iz[l];
@@ -212,21 +251,25 @@ fn sheared(a: &[f32; 3], b: &[f32; 3], c: &[f32; 3], sh: &ShearLanes, l: usize) 
 /// that comes out exactly 0 is recomputed by `edge_function` itself (its exact
 /// fallback), so that every lane's (t, u, v) is the scalar test's, bit for bit.
 #[inline(always)]
-fn watertight_lanes(
+fn watertight_lanes<O: Origins>(
     tri: &Triangle,
-    r: &Lanes,
+    r: &Lanes<O>,
     sh: &ShearLanes,
     mask: Mask,
     t_min: f32,
     t_max: &[f32; LANES],
 ) -> TriLanes {
-    let o = r.origin;
-    let a = [tri.a[0] - o.x, tri.a[1] - o.y, tri.a[2] - o.z];
-    let b = [tri.b[0] - o.x, tri.b[1] - o.y, tri.b[2] - o.z];
-    let c = [tri.c[0] - o.x, tri.c[1] - o.y, tri.c[2] - o.z];
+    let rel = |l: usize| {
+        (
+            r.origin.rel(&tri.a, l),
+            r.origin.rel(&tri.b, l),
+            r.origin.rel(&tri.c, l),
+        )
+    };
     let mut e = [[0.0f32; LANES]; 3];
     let mut zero_flags = [false; LANES];
     for l in 0..LANES {
+        let (a, b, c) = rel(l);
         let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
         e[0][l] = cx * by - cy * bx;
         e[1][l] = ax * cy - ay * cx;
@@ -238,6 +281,7 @@ fn watertight_lanes(
     while fix != 0 {
         let l = fix.trailing_zeros() as usize;
         fix &= fix - 1;
+        let (a, b, c) = rel(l);
         let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
         e[0][l] = edge_function(cx, by, cy, bx);
         e[1][l] = edge_function(ax, cy, ay, cx);
@@ -255,6 +299,7 @@ fn watertight_lanes(
         #[allow(clippy::eq_op)]
         let degenerate = det == 0.0 || det != det;
         let kz = sh.kz[l];
+        let (a, b, c) = rel(l);
         let az = sh.sz[l] * pick(&a, kz);
         let bz = sh.sz[l] * pick(&b, kz);
         let cz = sh.sz[l] * pick(&c, kz);
@@ -305,7 +350,7 @@ fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
 fn closest_hit_all_lanes(
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
-    r: &Lanes,
+    r: &Lanes<Shared>,
     sh: &ShearLanes,
     mask: Mask,
     t_min: f32,
@@ -383,6 +428,136 @@ pub struct PacketHits {
     pub slots: [u32; LANES],
 }
 
+/// `occluded(ray, 0, 1, skip)` for each lane in `mask`, the rays given by their origins
+/// `o` and directions `d` (structure of arrays): the lanes whose ray is blocked. Through
+/// the BVH each lane reaches exactly the leaves its own `occluded_bvh` would (its box
+/// tests are `box_interval`'s operations, against a t_max that never shrinks), so the
+/// answer is the same, whatever order the packet takes.
+#[inline(always)]
+fn occluded_lanes(
+    g: &Globals<f32>,
+    o: [[f32; LANES]; 3],
+    d: &[[f32; LANES]; 3],
+    skip: &[u32; LANES],
+    mask: Mask,
+) -> Mask {
+    let (t_min, t_max) = (0.0f32, finite_bound(1.0f32));
+    let watertight = g.spec.triangle_algo == TRIANGLE_WATERTIGHT;
+    let sh = shear_lanes(d, watertight);
+    let ray = |l: usize| Ray {
+        origin: V3::new(o[0][l], o[1][l], o[2][l]),
+        dir: V3::new(d[0][l], d[1][l], d[2][l]),
+    };
+    let r = Lanes::new(PerLane(o), d);
+    let bound = [t_max; LANES];
+    let mut blocked: Mask = 0;
+    // Tests primitive `id` (triangle `tri` when it is one) for the lanes in `m`; returns
+    // the lanes it blocks.
+    let test = |id: u32, tri: Option<&Triangle>, m: Mask| -> Mask {
+        let mut out: Mask = 0;
+        if let (Some(tri), true) = (tri, watertight) {
+            let h = watertight_lanes(tri, &r, &sh, m, t_min, &bound);
+            for l in 0..LANES {
+                out |= (((m >> l) & 1 != 0 && id != skip[l] && h.t[l] < t_max) as Mask) << l;
+            }
+            return out;
+        }
+        let mut left = m;
+        while left != 0 {
+            let l = left.trailing_zeros() as usize;
+            left &= left - 1;
+            if id != skip[l] && hit_prim(g, ray(l), sh.lane(l), id, t_min, t_max).0 < t_max {
+                out |= 1 << l;
+            }
+        }
+        out
+    };
+    if !g.spec.use_bvh {
+        // `occluded_all`: spheres, then triangles, each lane until it is blocked.
+        let mut open = mask;
+        if g.spec.has_spheres {
+            for k in 0..g.buf.params.n_spheres {
+                if open == 0 {
+                    break;
+                }
+                open &= !test(k, None, open);
+            }
+        }
+        if g.spec.has_triangles {
+            for k in 0..g.buf.params.n_triangles {
+                if open == 0 {
+                    break;
+                }
+                open &= !test(k | TRIANGLE_BIT, Some(&g.buf.triangles[k as usize]), open);
+            }
+        }
+        return mask & !open;
+    }
+    let nodes = &g.buf.nodes;
+    if g.buf.params.n_nodes == 0 {
+        return 0;
+    }
+    let mut near_l = [0.0f32; LANES];
+    let mut near_r = [0.0f32; LANES];
+    let mut lanes = box_lanes(&nodes[0], &r, t_min, &bound, &mut near_l) & mask;
+    let mut stack = [(0u32, 0 as Mask); BVH_STACK];
+    let mut sp = 0usize;
+    let mut at = 0u32;
+    for _step in 0..g.buf.params.n_nodes {
+        lanes &= !blocked;
+        if lanes != 0 {
+            let node = &nodes[at as usize];
+            let count = node.count_axis >> 2;
+            if count == 0 {
+                let left = &nodes[at as usize + 1];
+                let right = &nodes[node.first as usize];
+                let ml = box_lanes(left, &r, t_min, &bound, &mut near_l) & lanes;
+                let mr = box_lanes(right, &r, t_min, &bound, &mut near_r) & lanes;
+                if ml != 0 && mr != 0 {
+                    let both = ml & mr;
+                    let mut vote = 0i32;
+                    for l in 0..LANES {
+                        let v = ((both >> l) & 1) as i32;
+                        vote += v * if near_r[l] < near_l[l] { 1 } else { -1 };
+                    }
+                    let (near, far) = if vote > 0 {
+                        ((node.first, mr), (at + 1, ml))
+                    } else {
+                        ((at + 1, ml), (node.first, mr))
+                    };
+                    stack[sp] = far;
+                    sp += 1;
+                    (at, lanes) = near;
+                    continue;
+                }
+                if ml != 0 {
+                    (at, lanes) = (at + 1, ml);
+                    continue;
+                }
+                if mr != 0 {
+                    (at, lanes) = (node.first, mr);
+                    continue;
+                }
+            } else {
+                for k in node.first..node.first + count {
+                    let id = g.buf.prim_ids[k as usize];
+                    let tri = ((id & TRIANGLE_BIT) != 0).then(|| &g.buf.leaf_triangles[k as usize]);
+                    blocked |= test(id, tri, lanes & !blocked);
+                    if lanes & !blocked == 0 {
+                        break;
+                    }
+                }
+            }
+        }
+        if sp == 0 || mask & !blocked == 0 {
+            break;
+        }
+        sp -= 1;
+        (at, lanes) = stack[sp];
+    }
+    blocked
+}
+
 /// `closest_hit` for the rays of `rays` whose bit is set in `active` (the others are
 /// returned as misses): the same hit for each ray as `closest_hit` gives it, through the
 /// BVH (`closest_hit_bvh`) or testing every primitive (`closest_hit_all`) as the
@@ -418,17 +593,7 @@ pub fn closest_hit_packet(
         dir[1][l] = rays[l].dir.y;
         dir[2][l] = rays[l].dir.z;
     }
-    let mut r = Lanes {
-        origin: rays[0].origin,
-        ix: [0.0; LANES],
-        iy: [0.0; LANES],
-        iz: [0.0; LANES],
-    };
-    for l in 0..LANES {
-        r.ix[l] = 1.0 / dir[0][l];
-        r.iy[l] = 1.0 / dir[1][l];
-        r.iz[l] = 1.0 / dir[2][l];
-    }
+    let r = Lanes::new(Shared(rays[0].origin), &dir);
     let watertight = g.spec.triangle_algo == TRIANGLE_WATERTIGHT;
     let lane_triangles = g.spec.has_triangles && watertight;
     let sh = shear_lanes(&dir, watertight);
@@ -756,20 +921,20 @@ fn shade_lanes(
                 on_flags[l] = ndl[l] > 0.0;
             }
             let mut on = mask_of(&on_flags) & diffuse;
-            if g.spec.shadows {
-                let mut m = on;
-                while m != 0 {
-                    let l = m.trailing_zeros() as usize;
-                    m &= m - 1;
+            if g.spec.shadows && on != 0 {
+                let mut so = [[0.0f32; LANES]; 3];
+                let mut sd = [[0.0f32; LANES]; 3];
+                let mut skip = [PRIM_NONE; LANES];
+                for l in 0..LANES {
                     let pl = V3::new(p[0][l], p[1][l], p[2][l]);
                     let nl = V3::new(n[0][l], n[1][l], n[2][l]);
-                    let so = shadow_origin(pl, nl);
-                    let d = V3::from(position) - so;
-                    let shadow = Ray { origin: so, dir: d };
-                    if occluded(g, shadow, 0.0, 1.0, hits[l].prim) {
-                        on &= !(1 << l);
-                    }
+                    let o = shadow_origin(pl, nl);
+                    let d = V3::from(position) - o;
+                    [so[0][l], so[1][l], so[2][l]] = [o.x, o.y, o.z];
+                    [sd[0][l], sd[1][l], sd[2][l]] = [d.x, d.y, d.z];
+                    skip[l] = hits[l].prim;
                 }
+                on &= !occluded_lanes(g, so, &sd, &skip, on);
             }
             for l in 0..LANES {
                 if (on >> l) & 1 != 0 {
