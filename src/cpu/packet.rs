@@ -8,11 +8,13 @@
 //! the same image bit for bit. Lane by lane it does the mirror's operations in the
 //! mirror's order: `camera_ray`, `make_shear`, `box_interval`, the watertight test and
 //! `shade` are written again as lane loops, op for op; everything else (the other
-//! triangle tests, spheres, shadow rays, `pow`) calls the mirror's own functions one lane
-//! at a time. Only the order in which BVH leaves are reached differs, and
-//! `closest_hit_bvh`'s result does not depend on that order: it is the hit with the
-//! smallest t and, of equal t, the lowest primitive id (what `closest_hit_all` keeps),
-//! because every box test is conservative for any bound past the nearest hit.
+//! triangle tests, spheres, `pow`) calls the mirror's own functions one lane at a time.
+//! Shadow rays go eight at a time as well, each lane from its own origin. Only the order
+//! in which BVH leaves are reached differs, and `closest_hit_bvh`'s result does not
+//! depend on that order: it is the hit with the smallest t and, of equal t, the lowest
+//! primitive id (what `closest_hit_all` keeps), because every box test is conservative
+//! for any bound past the nearest hit. `occluded_bvh`'s answer does not depend on it
+//! either: each lane reaches exactly the leaves its own traversal would.
 //! `tests/packets.rs` checks the two images against each other, bit for bit.
 
 // Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
