@@ -430,6 +430,58 @@ pub struct PacketHits {
     pub slots: [u32; LANES],
 }
 
+/// A packet's step at interior node `node` (index `at`) for the lanes in `lanes`: both
+/// children's boxes tested per lane against `bound`; where some lanes enter both, the
+/// nearer by the vote of those lanes comes next and the other is pushed with its lanes.
+/// Returns the child to visit next with its lanes, or `None` when no lane enters either.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn descend<O: Origins>(
+    g: &Globals<f32>,
+    at: u32,
+    node: &BvhNode,
+    r: &Lanes<O>,
+    t_min: f32,
+    bound: &[f32; LANES],
+    lanes: Mask,
+    stack: &mut [(u32, Mask); BVH_STACK],
+    sp: &mut usize,
+) -> Option<(u32, Mask)> {
+    let nodes = &g.buf.nodes;
+    let (left, right) = (&nodes[at as usize + 1], &nodes[node.first as usize]);
+    let mut near_l = [0.0f32; LANES];
+    let mut near_r = [0.0f32; LANES];
+    let ml = box_lanes(left, r, t_min, bound, &mut near_l) & lanes;
+    let mr = box_lanes(right, r, t_min, bound, &mut near_r) & lanes;
+    if ml != 0 && mr != 0 {
+        let both = ml & mr;
+        let mut vote = 0i32;
+        for l in 0..LANES {
+            let w = ((both >> l) & 1) as i32;
+            vote += w * if near_r[l] < near_l[l] { 1 } else { -1 };
+        }
+        let (near, far) = if vote > 0 {
+            ((node.first, mr), (at + 1, ml))
+        } else {
+            ((at + 1, ml), (node.first, mr))
+        };
+        prefetch_children(g, left);
+        prefetch_children(g, right);
+        stack[*sp] = far;
+        *sp += 1;
+        return Some(near);
+    }
+    if ml != 0 {
+        prefetch_children(g, left);
+        return Some((at + 1, ml));
+    }
+    if mr != 0 {
+        prefetch_children(g, right);
+        return Some((node.first, mr));
+    }
+    None
+}
+
 /// `occluded(ray, 0, 1, skip)` for each lane in `mask`, the rays given by their origins
 /// `o` and directions `d` (structure of arrays): the lanes whose ray is blocked. Through
 /// the BVH each lane reaches exactly the leaves its own `occluded_bvh` would (its box
@@ -499,9 +551,8 @@ fn occluded_lanes(
     if g.buf.params.n_nodes == 0 {
         return 0;
     }
-    let mut near_l = [0.0f32; LANES];
-    let mut near_r = [0.0f32; LANES];
-    let mut lanes = box_lanes(&nodes[0], &r, t_min, &bound, &mut near_l) & mask;
+    let mut near = [0.0f32; LANES];
+    let mut lanes = box_lanes(&nodes[0], &r, t_min, &bound, &mut near) & mask;
     let mut stack = [(0u32, 0 as Mask); BVH_STACK];
     let mut sp = 0usize;
     let mut at = 0u32;
@@ -511,33 +562,9 @@ fn occluded_lanes(
             let node = &nodes[at as usize];
             let count = node.count_axis >> 2;
             if count == 0 {
-                let left = &nodes[at as usize + 1];
-                let right = &nodes[node.first as usize];
-                let ml = box_lanes(left, &r, t_min, &bound, &mut near_l) & lanes;
-                let mr = box_lanes(right, &r, t_min, &bound, &mut near_r) & lanes;
-                if ml != 0 && mr != 0 {
-                    let both = ml & mr;
-                    let mut vote = 0i32;
-                    for l in 0..LANES {
-                        let v = ((both >> l) & 1) as i32;
-                        vote += v * if near_r[l] < near_l[l] { 1 } else { -1 };
-                    }
-                    let (near, far) = if vote > 0 {
-                        ((node.first, mr), (at + 1, ml))
-                    } else {
-                        ((at + 1, ml), (node.first, mr))
-                    };
-                    stack[sp] = far;
-                    sp += 1;
-                    (at, lanes) = near;
-                    continue;
-                }
-                if ml != 0 {
-                    (at, lanes) = (at + 1, ml);
-                    continue;
-                }
-                if mr != 0 {
-                    (at, lanes) = (node.first, mr);
+                let next = descend(g, at, node, &r, t_min, &bound, lanes, &mut stack, &mut sp);
+                if let Some(next) = next {
+                    (at, lanes) = next;
                     continue;
                 }
             } else {
@@ -607,10 +634,9 @@ pub fn closest_hit_packet(
     if g.buf.params.n_nodes == 0 {
         return out;
     }
-    let mut near_l = [0.0f32; LANES];
-    let mut near_r = [0.0f32; LANES];
+    let mut near = [0.0f32; LANES];
     let mut bound = [t_max; LANES];
-    let mut mask = box_lanes(&nodes[0], &r, t_min, &bound, &mut near_l) & active;
+    let mut mask = box_lanes(&nodes[0], &r, t_min, &bound, &mut near) & active;
     if mask == 0 {
         return out;
     }
@@ -621,42 +647,9 @@ pub fn closest_hit_packet(
         let node = &nodes[at as usize];
         let count = node.count_axis >> 2;
         if count == 0 {
-            let left = &nodes[at as usize + 1];
-            let right = &nodes[node.first as usize];
-            let ml = box_lanes(left, &r, t_min, &bound, &mut near_l) & mask;
-            let mr = box_lanes(right, &r, t_min, &bound, &mut near_r) & mask;
-            if ml != 0 && mr != 0 {
-                // Nearer first by the vote of the lanes that meet both.
-                let both = ml & mr;
-                let mut vote = 0i32;
-                for l in 0..LANES {
-                    let w = ((both >> l) & 1) as i32;
-                    vote += w * if near_r[l] < near_l[l] { 1 } else { -1 };
-                }
-                if vote > 0 {
-                    stack[sp] = (at + 1, ml);
-                    at = node.first;
-                    mask = mr;
-                } else {
-                    stack[sp] = (node.first, mr);
-                    at += 1;
-                    mask = ml;
-                }
-                prefetch_children(g, left);
-                prefetch_children(g, right);
-                sp += 1;
-                continue;
-            }
-            if ml != 0 {
-                prefetch_children(g, left);
-                at += 1;
-                mask = ml;
-                continue;
-            }
-            if mr != 0 {
-                prefetch_children(g, right);
-                at = node.first;
-                mask = mr;
+            let next = descend(g, at, node, &r, t_min, &bound, mask, &mut stack, &mut sp);
+            if let Some(next) = next {
+                (at, mask) = next;
                 continue;
             }
         } else {
