@@ -713,7 +713,11 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     }
     var color = params.ambient * m.ka;
     if USES_DIFFUSE && m.model != MODEL_AMBIENT {
-        let v = normalize(ray.origin - p);
+        // The view vector is the reversed ray. Not `normalize(ray.origin - p)`: that is
+        // origin − (origin + dir·t), which loses low bits to cancellation, and which
+        // lavapipe's compiler folds to −dir·t while Rust rounds p first, so the two
+        // tracers disagreed in low bits under sharp highlights.
+        let v = normalize(-ray.dir);
         for (var k = 0u; k < params.n_lights; k = k + 1u) {
             let light = lights[k];
             let to_light = light.position - p;

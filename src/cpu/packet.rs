@@ -893,9 +893,9 @@ fn shade_lanes(
     if g.spec.uses_diffuse && diffuse != 0 {
         let mut to_eye = [[0.0f32; LANES]; 3];
         for l in 0..LANES {
-            to_eye[0][l] = o.x - p[0][l];
-            to_eye[1][l] = o.y - p[1][l];
-            to_eye[2][l] = o.z - p[2][l];
+            to_eye[0][l] = -dir[0][l];
+            to_eye[1][l] = -dir[1][l];
+            to_eye[2][l] = -dir[2][l];
         }
         let v = normalize_lanes(&to_eye);
         for k in 0..g.buf.params.n_lights {

@@ -783,7 +783,8 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
     }
     let mut color = V3::from_f32(g.buf.params.ambient) * V3::from_f32(m.ka);
     if g.spec.uses_diffuse && m.model != MODEL_AMBIENT {
-        let v = (ray.origin - p).normalize();
+        // The reversed ray, as the shader has it (see there why not `origin - p`).
+        let v = (-ray.dir).normalize();
         for k in 0..g.buf.params.n_lights {
             let light: &Light = &g.buf.lights[k as usize];
             let position = V3::from_f32(light.position);
