@@ -47,6 +47,15 @@ fn render_with<R: Real>(g: &Globals<R>, progress: &Progress<'_>) -> Image {
     }
 }
 
+/// What the f32 tracers see: the camera exactly as the shader receives it.
+fn globals_f32(buf: &SceneBuffers, spec: Specialisation) -> Globals<'_, f32> {
+    Globals {
+        cam: Camera::from_params(&buf.params),
+        buf,
+        spec,
+    }
+}
+
 /// Renders in packets of `packet::LANES` camera rays (blocks of `PACKET_W` × `PACKET_H`
 /// pixels, bands of `PACKET_H` rows in parallel): the same image as [`render_with`].
 fn render_packets(g: &Globals<f32>, simd: packet::Simd, progress: &Progress<'_>) -> Image {
@@ -59,16 +68,17 @@ fn render_packets(g: &Globals<f32>, simd: packet::Simd, progress: &Progress<'_>)
         .enumerate()
         .for_each(|(b, rows)| {
             let j = b as u32 * packet::PACKET_H;
+            // The last band may have fewer rows than a packet.
+            let n = rows.len() as u32 / w;
             for i in (0..w).step_by(packet::PACKET_W as usize) {
                 let px = packet::trace_packet(g, i, j, simd);
                 for (l, c) in px.iter().enumerate() {
                     let (x, y) = (i + l as u32 % packet::PACKET_W, l as u32 / packet::PACKET_W);
-                    if x < w && (y as usize) * (w as usize) < rows.len() {
-                        rows[y as usize * w as usize + x as usize] = *c;
+                    if x < w && y < n {
+                        rows[(y * w + x) as usize] = *c;
                     }
                 }
             }
-            let n = rows.len() as u32 / w;
             progress(done.fetch_add(n, Ordering::Relaxed) + n, h);
         });
     Image {
@@ -91,33 +101,21 @@ pub fn render_f32_progress(
     spec: Specialisation,
     progress: &Progress<'_>,
 ) -> Image {
-    let g = Globals {
-        cam: Camera::from_params(&buf.params),
-        buf,
-        spec,
-    };
+    let g = globals_f32(buf, spec);
     render_packets(&g, packet::Simd::Best, progress)
 }
 
 /// [`render_f32`] with the packet tracer built for the baseline instruction set (what a
 /// CPU without AVX2 runs), for tests on machines that have it.
 pub fn render_f32_baseline(buf: &SceneBuffers, spec: Specialisation) -> Image {
-    let g = Globals {
-        cam: Camera::from_params(&buf.params),
-        buf,
-        spec,
-    };
+    let g = globals_f32(buf, spec);
     render_packets(&g, packet::Simd::Baseline, &|_, _| {})
 }
 
 /// Renders with the f32 mirror of `trace.wgsl` itself, one `trace_pixel` per pixel: the
 /// slower twin that [`render_f32`] is checked against.
 pub fn render_f32_mirror(buf: &SceneBuffers, spec: Specialisation) -> Image {
-    let g = Globals {
-        cam: Camera::from_params(&buf.params),
-        buf,
-        spec,
-    };
+    let g = globals_f32(buf, spec);
     render_with(&g, &|_, _| {})
 }
 
@@ -146,10 +144,6 @@ pub fn render_f64(scene: &Scene, buf: &SceneBuffers, spec: Specialisation) -> Im
 
 /// The `query` entry point on the CPU, in f32 (the shader's twin) over many rays.
 pub fn query_f32(buf: &SceneBuffers, spec: Specialisation, rays: &[RayIn]) -> Vec<HitOut> {
-    let g = Globals {
-        cam: Camera::from_params(&buf.params),
-        buf,
-        spec,
-    };
+    let g = globals_f32(buf, spec);
     rays.par_iter().map(|r| trace::query(&g, r)).collect()
 }

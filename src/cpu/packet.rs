@@ -333,17 +333,59 @@ fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
             unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
             return;
         }
-        // A leaf's triangles are consecutive in `leaf_triangles`, 48 bytes each.
+        // A leaf's triangles are consecutive in `leaf_triangles`.
         let first = g
             .buf
             .leaf_triangles
             .as_ptr()
             .wrapping_add(node.first as usize) as *const i8;
-        for line in 0..(count as usize * 48).div_ceil(64) {
+        for line in 0..(count as usize * size_of::<Triangle>()).div_ceil(64) {
             // SAFETY: as above.
             unsafe { _mm_prefetch::<_MM_HINT_T0>(first.wrapping_add(64 * line)) };
         }
     }
+}
+
+/// `hit_prim` of primitive `id` for the lanes in `mask`, lane l against `t_max[l]`; `tri`
+/// is its triangle when it is one (`triangles[id]` or its copy in `leaf_triangles`). A
+/// triangle goes through `watertight_lanes` under the watertight algorithm, else through
+/// the mirror's `hit_triangle` lane by lane; a sphere through the mirror's `hit_prim`.
+/// Only the lanes in `mask` are meaningful.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn prim_lanes<O: Origins>(
+    g: &Globals<f32>,
+    ray: impl Fn(usize) -> Ray<f32>,
+    r: &Lanes<O>,
+    sh: &ShearLanes,
+    id: u32,
+    tri: Option<&Triangle>,
+    mask: Mask,
+    t_min: f32,
+    t_max: &[f32; LANES],
+) -> TriLanes {
+    let tri = tri.filter(|_| g.spec.has_triangles);
+    if let Some(tri) = tri
+        && g.spec.triangle_algo == TRIANGLE_WATERTIGHT
+    {
+        return watertight_lanes(tri, r, sh, mask, t_min, t_max);
+    }
+    let mut h = TriLanes {
+        t: [INFINITY; LANES],
+        u: [0.0; LANES],
+        v: [0.0; LANES],
+    };
+    let mut m = mask;
+    while m != 0 {
+        let l = m.trailing_zeros() as usize;
+        m &= m - 1;
+        (h.t[l], h.u[l], h.v[l]) = match tri {
+            // `hit_prim` of a triangle, with the triangle already in hand.
+            Some(tri) => hit_triangle(g, ray(l), sh.lane(l), tri, t_min, t_max[l]),
+            None => hit_prim(g, ray(l), sh.lane(l), id, t_min, t_max[l]),
+        };
+    }
+    h
 }
 
 /// `closest_hit_all` for every lane in `mask`, into `best` (misses at t_max): spheres
@@ -378,28 +420,11 @@ fn closest_hit_all_lanes(
         }
     }
     if g.spec.has_triangles {
-        let lanes = g.spec.triangle_algo == TRIANGLE_WATERTIGHT;
         for k in 0..g.buf.params.n_triangles {
             let tri = &g.buf.triangles[k as usize];
-            let h = if lanes {
-                let t_max: [f32; LANES] = std::array::from_fn(|l| best[l].t);
-                watertight_lanes(tri, r, sh, mask, t_min, &t_max)
-            } else {
-                let mut h = TriLanes {
-                    t: [INFINITY; LANES],
-                    u: [0.0; LANES],
-                    v: [0.0; LANES],
-                };
-                let mut m = mask;
-                while m != 0 {
-                    let l = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    let shear = sh.lane(l);
-                    (h.t[l], h.u[l], h.v[l]) =
-                        hit_triangle(g, rays[l], shear, tri, t_min, best[l].t);
-                }
-                h
-            };
+            let t_max: [f32; LANES] = std::array::from_fn(|l| best[l].t);
+            let id = k | TRIANGLE_BIT;
+            let h = prim_lanes(g, |l| rays[l], r, sh, id, Some(tri), mask, t_min, &t_max);
             let mut m = mask;
             while m != 0 {
                 let l = m.trailing_zeros() as usize;
@@ -407,7 +432,7 @@ fn closest_hit_all_lanes(
                 if h.t[l] < best[l].t {
                     best[l] = Hit {
                         t: h.t[l],
-                        prim: k | TRIANGLE_BIT,
+                        prim: id,
                         u: h.u[l],
                         v: h.v[l],
                     };
@@ -496,8 +521,7 @@ fn occluded_lanes(
     mask: Mask,
 ) -> Mask {
     let (t_min, t_max) = (0.0f32, finite_bound(1.0f32));
-    let watertight = g.spec.triangle_algo == TRIANGLE_WATERTIGHT;
-    let sh = shear_lanes(d, watertight);
+    let sh = shear_lanes(d, g.spec.triangle_algo == TRIANGLE_WATERTIGHT);
     let ray = |l: usize| Ray {
         origin: V3::new(o[0][l], o[1][l], o[2][l]),
         dir: V3::new(d[0][l], d[1][l], d[2][l]),
@@ -508,23 +532,11 @@ fn occluded_lanes(
     // Tests primitive `id` (triangle `tri` when it is one) for the lanes in `m`; returns
     // the lanes it blocks.
     let test = |id: u32, tri: Option<&Triangle>, m: Mask| -> Mask {
-        let mut out: Mask = 0;
-        if let (Some(tri), true) = (tri, watertight) {
-            let h = watertight_lanes(tri, &r, &sh, m, t_min, &bound);
-            for l in 0..LANES {
-                out |= (((m >> l) & 1 != 0 && id != skip[l] && h.t[l] < t_max) as Mask) << l;
-            }
-            return out;
-        }
-        let mut left = m;
-        while left != 0 {
-            let l = left.trailing_zeros() as usize;
-            left &= left - 1;
-            if id != skip[l] && hit_prim(g, ray(l), sh.lane(l), id, t_min, t_max).0 < t_max {
-                out |= 1 << l;
-            }
-        }
-        out
+        let skipped: [bool; LANES] = std::array::from_fn(|l| skip[l] == id);
+        let m = m & !mask_of(&skipped);
+        let h = prim_lanes(g, ray, &r, &sh, id, tri, m, t_min, &bound);
+        let hit: [bool; LANES] = std::array::from_fn(|l| h.t[l] < t_max);
+        m & mask_of(&hit)
     };
     if !g.spec.use_bvh {
         // `occluded_all`: spheres, then triangles, each lane until it is blocked.
@@ -623,9 +635,7 @@ pub fn closest_hit_packet(
         dir[2][l] = rays[l].dir.z;
     }
     let r = Lanes::new(Shared(rays[0].origin), &dir);
-    let watertight = g.spec.triangle_algo == TRIANGLE_WATERTIGHT;
-    let lane_triangles = g.spec.has_triangles && watertight;
-    let sh = shear_lanes(&dir, watertight);
+    let sh = shear_lanes(&dir, g.spec.triangle_algo == TRIANGLE_WATERTIGHT);
     if !g.spec.use_bvh {
         closest_hit_all_lanes(g, rays, &r, &sh, active, t_min, best);
         return out;
@@ -655,37 +665,18 @@ pub fn closest_hit_packet(
         } else {
             for k in node.first..node.first + count {
                 let id = g.buf.prim_ids[k as usize];
-                if lane_triangles && (id & TRIANGLE_BIT) != 0 {
-                    let tri = &g.buf.leaf_triangles[k as usize];
-                    let h = watertight_lanes(tri, &r, &sh, mask, t_min, &bound);
-                    let mut m = mask;
-                    while m != 0 {
-                        let l = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        if nearer(h.t[l], id, &best[l]) {
-                            best[l] = Hit {
-                                t: h.t[l],
-                                prim: id,
-                                u: h.u[l],
-                                v: h.v[l],
-                            };
-                            bound[l] = tie_bound(&best[l]);
-                            slots[l] = k;
-                        }
-                    }
-                    continue;
-                }
+                let tri = ((id & TRIANGLE_BIT) != 0).then(|| &g.buf.leaf_triangles[k as usize]);
+                let h = prim_lanes(g, |l| rays[l], &r, &sh, id, tri, mask, t_min, &bound);
                 let mut m = mask;
                 while m != 0 {
                     let l = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    let h = hit_prim(g, rays[l], sh.lane(l), id, t_min, bound[l]);
-                    if nearer(h.0, id, &best[l]) {
+                    if nearer(h.t[l], id, &best[l]) {
                         best[l] = Hit {
-                            t: h.0,
+                            t: h.t[l],
                             prim: id,
-                            u: h.1,
-                            v: h.2,
+                            u: h.u[l],
+                            v: h.v[l],
                         };
                         bound[l] = tie_bound(&best[l]);
                         slots[l] = k;
