@@ -13,6 +13,8 @@ pub struct Diff {
     pub differing_bits: usize,
     /// Pixels that one image hit and the other missed.
     pub hit_miss: usize,
+    /// Pixels that both images hit at distances that differ in some f32 bit.
+    pub differing_t: usize,
     /// Largest channel difference, linear [0, 1] units.
     pub max_abs: f64,
     /// Root mean square channel difference.
@@ -21,6 +23,14 @@ pub struct Diff {
     pub mean_abs: f64,
     /// Largest 8-bit channel difference.
     pub max_u8: u8,
+}
+
+impl Diff {
+    /// Whether the two images are the same in every f32 bit of every colour, in every
+    /// hit/miss and in every bit of every hit distance: what lavapipe must give.
+    pub fn bit_exact(&self) -> bool {
+        self.differing_bits == 0 && self.hit_miss == 0 && self.differing_t == 0
+    }
 }
 
 /// Compares `a` with `b` (their sizes must match).
@@ -51,7 +61,9 @@ pub fn diff(a: &Image, b: &Image) -> Diff {
         }
         d.differing_pixels += off8 as usize;
         d.differing_bits += off_bits as usize;
-        d.hit_miss += ((p[3] >= 0.0) != (q[3] >= 0.0)) as usize;
+        let (hit_p, hit_q) = (p[3] >= 0.0, q[3] >= 0.0);
+        d.hit_miss += (hit_p != hit_q) as usize;
+        d.differing_t += (hit_p && hit_q && p[3].to_bits() != q[3].to_bits()) as usize;
     }
     let n = (3 * d.pixels).max(1) as f64;
     d.mean_abs = sum / n;

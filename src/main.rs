@@ -74,6 +74,8 @@ enum Command {
         #[arg(long, default_value = "diff.png")]
         diff: PathBuf,
     },
+    /// List the Vulkan adapters, best first, with their drivers and versions.
+    Adapters,
     /// Speed against error: every scene × tracer × triangle algorithm, with a warm-up and
     /// timed runs; writes report.md, report.json and plot.png to --out.
     Bench {
@@ -270,6 +272,20 @@ fn run(cli: Cli) -> Result<()> {
             no_gpu,
             triangle,
         } => bench(scenes, size, triangle, runs, out, adapter, no_gpu),
+        Command::Adapters => {
+            let list = glint::gpu::adapters();
+            if list.is_empty() {
+                bail!("{}", glint::gpu::GpuError::NoAdapter);
+            }
+            for a in list {
+                let i = a.get_info();
+                println!(
+                    "{} ({:?}, {} {})",
+                    i.name, i.device_type, i.driver, i.driver_info
+                );
+            }
+            Ok(())
+        }
         Command::Compare {
             scene,
             size,
@@ -295,8 +311,19 @@ fn run(cli: Cli) -> Result<()> {
             println!("scene: {} at {w}x{h}, triangles: {algo}", scene.display());
             println!(
                 "gpu vs cpu: {} differing pixels (8-bit), {} differing in some f32 bit, {} hit/miss disagreements, \
+                 {} hits at a distance t that differs in some bit, \
                  largest channel difference {:.3e} ({} in 8 bits), mean {:.3e}",
-                d.differing_pixels, d.differing_bits, d.hit_miss, d.max_abs, d.max_u8, d.mean_abs
+                d.differing_pixels,
+                d.differing_bits,
+                d.hit_miss,
+                d.differing_t,
+                d.max_abs,
+                d.max_u8,
+                d.mean_abs
+            );
+            println!(
+                "gpu = cpu in every bit (colour, hit/miss, t): {}",
+                if d.bit_exact() { "yes" } else { "NO" }
             );
             println!(
                 "cpu f32 vs f64: {} differing pixels (8-bit), {} hit/miss, largest {:.3e}, rms {:.3e}",

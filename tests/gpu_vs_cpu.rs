@@ -3,6 +3,8 @@
 
 mod common;
 
+gpu_sentinel!();
+
 use common::{SEED_SCENES, buffers, check_agreement, render_gpu, seed_scene};
 use glint::buffers::RayIn;
 use glint::scene::TriangleAlgorithm;
@@ -35,6 +37,32 @@ fn seed_scenes_agree_on_every_algorithm() {
     }
 }
 
+/// The general pipeline (everything compiled in, the BVH on, as the bench's "general" rows
+/// run it) agrees with the CPU mirror run with the same constants, and gives the specialised
+/// pipeline's image.
+#[test]
+fn general_pipeline_agrees() {
+    let Some(gpu) = common::gpu() else { return };
+    let lavapipe = common::is_lavapipe(gpu);
+    for name in ["sphere", "umbrella", "mitsubishi", "mitsubishi-shadows"] {
+        let scene = seed_scene(name);
+        for algo in TriangleAlgorithm::ALL {
+            let (buf, spec) = buffers(&scene, 320, 240, algo);
+            let general = glint::buffers::Specialisation::general(&buf);
+            assert_ne!(general, spec, "{name}: the general pipeline must differ");
+            let g = render_gpu(gpu, &buf, general);
+            let c = glint::cpu::render_f32(&buf, general);
+            check_agreement(&g, &c, lavapipe)
+                .unwrap_or_else(|e| panic!("{name}/{algo} general: {e}"));
+            let specialised = glint::cpu::render_f32(&buf, spec);
+            assert!(
+                glint::compare::diff(&c, &specialised).bit_exact(),
+                "{name}/{algo}: the general pipeline changes the image"
+            );
+        }
+    }
+}
+
 /// The twin: one pixel changed by one ULP, or one hit turned into a miss, fails the check.
 #[test]
 fn agreement_check_fails_on_perturbed_image() {
@@ -52,6 +80,15 @@ fn agreement_check_fails_on_perturbed_image() {
     assert!(
         check_agreement(&ulp, &c, true).is_err(),
         "one ULP must fail on lavapipe"
+    );
+    // The hit distance is compared in every bit too (one ULP of t, colours unchanged).
+    let mut far = c.clone();
+    far.pixels[k][3] = f32::from_bits(far.pixels[k][3].to_bits() + 1);
+    let d = glint::compare::diff(&far, &c);
+    assert_eq!((d.differing_bits, d.differing_t), (0, 1));
+    assert!(
+        check_agreement(&far, &c, true).is_err(),
+        "one ULP of t must fail on lavapipe"
     );
     let mut miss = c.clone();
     miss.pixels[k][3] = -1.0;
@@ -110,6 +147,24 @@ fn query_entry_point_agrees() {
                 0,
                 "{algo}: {bad} of {} query results differ",
                 rays.len()
+            );
+        } else {
+            // Other adapters round `dot`, `normalize` and fused products their own way: the
+            // same tolerance as the images, 0.01 % hit/miss disagreements.
+            let hit_miss = g
+                .iter()
+                .zip(&c)
+                .filter(|(a, b)| {
+                    (a.prim == glint::buffers::PRIM_NONE) != (b.prim == glint::buffers::PRIM_NONE)
+                })
+                .count();
+            eprintln!(
+                "{algo} on {}: {hit_miss} hit/miss disagreements",
+                gpu.describe()
+            );
+            assert!(
+                hit_miss * 10_000 <= rays.len(),
+                "{algo}: {hit_miss} hit/miss"
             );
         }
     }

@@ -3,6 +3,8 @@
 
 mod common;
 
+gpu_sentinel!();
+
 use common::{buffers, seed_scene};
 use glint::cpu::trace::{Camera, Globals, trace_pixel};
 

@@ -6,6 +6,8 @@
 
 mod common;
 
+gpu_sentinel!();
+
 use std::path::{Path, PathBuf};
 
 use common::{Rng, check_agreement, query_both, render_gpu};
@@ -170,8 +172,8 @@ color = [0.3, 0.3, 0.4]
             "{algo}: the mesh must fill the frame"
         );
         let d = glint::compare::diff(&cpu, &brute);
-        assert_eq!(
-            d.differing_bits, 0,
+        assert!(
+            d.bit_exact(),
             "{algo}: BVH and brute-force images differ: {d:?}"
         );
         let Some(gpu) = common::gpu() else { continue };

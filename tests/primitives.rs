@@ -4,6 +4,8 @@
 
 mod common;
 
+gpu_sentinel!();
+
 use glint::cpu::real::V3;
 
 const PROBE: &str = r#"

@@ -3,6 +3,8 @@
 
 mod common;
 
+gpu_sentinel!();
+
 use common::{buffers, check_agreement, render_gpu};
 use glint::buffers::PRIM_NONE;
 use glint::cpu::real::V3;
@@ -30,6 +32,13 @@ ka = [1.0, 1.0, 1.0]
 kd = [0.8, 0.8, 0.8]
 [[triangles]]
 vertices = [[-2e4, 0.0, -2e4], [0.0, 0.0, 2e4], [2e4, 0.0, -2e4]]
+material = "floor"
+"#;
+
+/// A square over the floor, between it and the light, for the floor test's twin.
+const BLOCKER: &str = r#"
+[[triangles]]
+vertices = [[-2.0, 20.0, -2.0], [2.0, 20.0, -2.0], [0.0, 20.0, 2.0]]
 material = "floor"
 "#;
 
@@ -89,6 +98,21 @@ fn huge_floor_casts_no_shadow_on_itself() {
             rate(counts[3])
         );
         assert!(floor > 30_000, "the floor fills too little of the frame");
+        // The twin: the same scheme with a blocker between the floor and the light shadows
+        // the floor under it (a shadow test that never blocks would fail here).
+        let blocked = {
+            let s2 = scene(&format!("{FLOOR}{BLOCKER}"), true);
+            let (buf2, spec2) = buffers(&s2, 320, 240, algo);
+            let lit = glint::cpu::render_f32(&buf2, spec2);
+            lit.pixels
+                .iter()
+                .filter(|p| p[3] >= 0.0 && p[0] < 0.15)
+                .count()
+        };
+        assert!(
+            blocked > 1000,
+            "{algo}: a blocker casts no shadow ({blocked} pixels)"
+        );
         assert_eq!(
             counts[0], 0,
             "{algo}: glint's offset self-shadows the floor"
@@ -215,16 +239,44 @@ material = "m"
             .zip(&b.pixels)
             .filter(|(x, y)| x != y)
             .count();
-        // The slab's top (t at the slab) must be unchanged: it faces both lights.
-        let top_changed = a
-            .pixels
-            .iter()
-            .zip(&b.pixels)
-            .filter(|(x, y)| x != y && (x[3] - y[3]).abs() < 1e-6 && x[3] < 7.0)
-            .count();
-        eprintln!("{algo}: thin slab shadows {changed} pixels; top self-shadowed: {top_changed}");
+        // The pixels whose primary ray hits the slab's top (triangle 2): they face both
+        // lights and must be unchanged by shadows.
+        let g = Globals {
+            cam: Camera::from_params(&b1.params),
+            buf: &b1,
+            spec: s1,
+        };
+        let top: Vec<bool> = (0..120u32)
+            .flat_map(|j| (0..160u32).map(move |i| (i, j)))
+            .map(|(i, j)| {
+                let hit = trace::closest_hit(&g, trace::camera_ray(&g, i, j), 0.0, f32::MAX);
+                hit.prim == glint::buffers::TRIANGLE_BIT | 2
+            })
+            .collect();
+        let top_pixels = top.iter().filter(|&&t| t).count();
+        let self_shadowed = |a: &glint::image::Image| {
+            a.pixels
+                .iter()
+                .zip(&b.pixels)
+                .zip(&top)
+                .filter(|((x, y), t)| **t && x != y)
+                .count()
+        };
+        let top_changed = self_shadowed(&a);
+        eprintln!(
+            "{algo}: thin slab shadows {changed} pixels; top: {top_pixels} pixels, self-shadowed: {top_changed}"
+        );
         assert!(changed > 200, "{algo}: the slab casts no shadow");
+        assert!(top_pixels > 300, "{algo}: the slab's top is not in view");
         assert_eq!(top_changed, 0, "{algo}: the slab shadows its own lit face");
+        // The twin: the top's pixels darkened (as a self-shadow would) fail the check.
+        let mut dark = a.clone();
+        for (p, t) in dark.pixels.iter_mut().zip(&top) {
+            if *t {
+                p[0] *= 0.5;
+            }
+        }
+        assert_eq!(self_shadowed(&dark), top_pixels);
         if let Some(gpu) = common::gpu() {
             check_agreement(&render_gpu(gpu, &b1, s1), &a, common::is_lavapipe(gpu)).unwrap();
         }

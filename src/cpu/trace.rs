@@ -256,18 +256,18 @@ pub fn hit_triangle_moller_trumbore<R: Real>(
     if det == R::ZERO || det != det {
         return miss; // parallel, degenerate, or NaN
     }
-    let inv_det = R::ONE / det;
+    // Three quotients, not products by a shared 1/det: see the WGSL doc comment.
     let s = ray.origin - ta;
-    let u = s.dot(p) * inv_det;
+    let u = s.dot(p) / det;
     if !(u >= R::ZERO && u <= R::ONE) {
         return miss;
     }
     let q = s.cross(e1);
-    let v = ray.dir.dot(q) * inv_det;
+    let v = ray.dir.dot(q) / det;
     if !(v >= R::ZERO && u + v <= R::ONE) {
         return miss;
     }
-    let t = e2.dot(q) * inv_det;
+    let t = e2.dot(q) / det;
     if !in_interval(t, t_min, t_max) {
         return miss;
     }

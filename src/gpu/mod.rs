@@ -101,7 +101,9 @@ pub fn adapters() -> Vec<wgpu::Adapter> {
     list
 }
 
-/// Asks Mesa not to print its conformance warning for lavapipe on every start.
+/// Asks Mesa not to print its conformance warning for lavapipe on every start, and gives
+/// this process (only) a runtime folder when `XDG_RUNTIME_DIR` is unset, so Mesa's window
+/// system code does not print "XDG_RUNTIME_DIR is invalid or not set" up to four times.
 fn quiet_driver() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
@@ -109,7 +111,30 @@ fn quiet_driver() {
             // SAFETY: called once, before any Vulkan loader thread reads the environment.
             unsafe { std::env::set_var("MESA_VK_IGNORE_CONFORMANCE_WARNING", "1") };
         }
+        if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+            && let Some(dir) = private_runtime_dir()
+        {
+            // SAFETY: as above.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", dir) };
+        }
     });
+}
+
+/// A folder only this user can enter, under the temporary folder, made when missing; None
+/// when it cannot be made or someone else owns it.
+#[cfg(unix)]
+fn private_runtime_dir() -> Option<std::path::PathBuf> {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+    let uid = std::fs::metadata("/proc/self").ok()?.uid();
+    let dir = std::env::temp_dir().join(format!("glint-runtime-{uid}"));
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    let m = std::fs::symlink_metadata(&dir).ok()?;
+    (m.is_dir() && m.uid() == uid && m.permissions().mode() & 0o077 == 0).then_some(dir)
+}
+
+#[cfg(not(unix))]
+fn private_runtime_dir() -> Option<std::path::PathBuf> {
+    None
 }
 
 /// Whether an adapter is a CPU implementation (lavapipe, SwiftShader).

@@ -18,12 +18,43 @@ pub fn gpu() -> Option<&'static Gpu> {
         return None;
     }
     let adapter = std::env::var("GLINT_ADAPTER").ok();
-    match GPU.get_or_init(|| Gpu::new(adapter.as_deref()).map_err(|e| e.to_string())) {
+    match GPU.get_or_init(|| {
+        let g = Gpu::new(adapter.as_deref()).map_err(|e| e.to_string())?;
+        eprintln!("GPU tests on: {}", g.describe());
+        Ok(g)
+    }) {
         Ok(g) => Some(g),
         Err(e) => {
             panic!("no GPU for the GPU tests: {e}\n(set GLINT_SKIP_GPU=1 to skip them explicitly)")
         }
     }
+}
+
+/// Defines the test binary's `gpu_tests_ran` sentinel: it fails when there is no adapter,
+/// and it shows as "ignored", with the reason, in the test summary when `GLINT_SKIP_GPU=1`
+/// (the tests are then built with `--cfg glint_skip_gpu` by `build.rs`), so a skipped GPU
+/// suite can never read as a passed one.
+#[macro_export]
+macro_rules! gpu_sentinel {
+    () => {
+        #[test]
+        #[cfg_attr(
+            glint_skip_gpu,
+            ignore = "GLINT_SKIP_GPU=1: every GPU check in this binary was SKIPPED"
+        )]
+        fn gpu_tests_ran() {
+            let gpu = common::gpu().expect("GLINT_SKIP_GPU=1 at run time but not at build time");
+            eprintln!("adapter: {}", gpu.describe());
+            // `.ci/test.sh` names the driver each pass must run on.
+            if let Ok(want) = std::env::var("GLINT_EXPECT_DRIVER") {
+                assert!(
+                    gpu.describe().contains(&want),
+                    "this pass must run on {want}, but the adapter is {}",
+                    gpu.describe()
+                );
+            }
+        }
+    };
 }
 
 /// Whether the GPU is Mesa's lavapipe, where bit-exact agreement is asserted.
@@ -163,7 +194,7 @@ pub fn render_gpu(gpu: &Gpu, buf: &SceneBuffers, spec: Specialisation) -> Image 
 pub fn check_agreement(gpu_img: &Image, cpu_img: &Image, lavapipe: bool) -> Result<Diff, String> {
     let d = diff(gpu_img, cpu_img);
     let ok = if lavapipe {
-        d.differing_bits == 0 && d.hit_miss == 0
+        d.bit_exact()
     } else {
         d.differing_pixels * 1000 <= d.pixels && d.max_u8 <= 1 && d.hit_miss * 10_000 <= d.pixels
     };
@@ -368,4 +399,81 @@ pub fn random_scene(rng: &mut Rng) -> String {
         writeln!(s, "material = \"{}\"", mat(rng)).unwrap();
     }
     s
+}
+
+// ---- vertices on pixel rays -----------------------------------------------------------
+
+/// The directions of the tracer's own f32 camera rays through the centres of pixels (i, j).
+pub fn pixel_dirs(scene: &Scene, pixels: &[(u32, u32)]) -> Vec<[f32; 3]> {
+    let (w, h) = scene.size();
+    let buf = SceneBuffers::new(scene, w, h, scene.triangle);
+    let g = glint::cpu::trace::Globals {
+        cam: glint::cpu::trace::Camera::from_params(&buf.params),
+        buf: &buf,
+        spec: Specialisation::for_scene(&buf),
+    };
+    pixels
+        .iter()
+        .map(|&(i, j)| glint::cpu::trace::camera_ray(&g, i, j).dir.into())
+        .collect()
+}
+
+/// A bumpy height field seen from `eye`, whose shared vertices lie on pixel rays (to the
+/// ulp of `eye + dir * d`): every `step`-th pixel's centre ray carries a vertex at a
+/// distance that rises and falls from vertex to vertex, so many rays pass within an ulp of
+/// a vertex or an edge that two, four or six triangles share. `w`×`h` pixels.
+pub fn vertex_grid_scene(eye: [f32; 3], algo: &str, w: u32, h: u32, step: u32) -> String {
+    let look = [eye[0], eye[1], eye[2] - 1.0];
+    let head = format!(
+        "ambient = [0.2, 0.2, 0.2]\ntriangle = \"{algo}\"\n[camera]\neye = {eye:?}\n\
+         look_at = {look:?}\nfov = 50.0\nwidth = {w}\nheight = {h}\n\
+         [[lights]]\nposition = [{}, {}, {}]\ncolor = [1.0, 1.0, 1.0]\n\
+         [materials.m]\nmodel = \"phong\"\nka = [0.2, 0.3, 0.4]\nkd = [0.6, 0.5, 0.4]\n\
+         ks = [0.5, 0.5, 0.5]\nn = 12.0\n",
+        eye[0] - 3.0,
+        eye[1] + 4.0,
+        eye[2] + 2.0
+    );
+    let probe = Scene::parse(&head, std::path::Path::new("vertex-grid.toml")).unwrap();
+    let (nx, ny) = ((w - 1) / step + 1, (h - 1) / step + 1);
+    let pixels: Vec<(u32, u32)> = (0..ny)
+        .flat_map(|b| (0..nx).map(move |a| (a * step, b * step)))
+        .collect();
+    let dirs = pixel_dirs(&probe, &pixels);
+    let vertex = |a: u32, b: u32| {
+        let d = dirs[(b * nx + a) as usize];
+        let bump = 4.0 + 0.35 * ((a % 3) as f32 - 1.0) + 0.25 * ((b % 2) as f32);
+        [0, 1, 2].map(|k| eye[k] + d[k] * bump)
+    };
+    let mut s = head;
+    for b in 0..ny - 1 {
+        for a in 0..nx - 1 {
+            let (p, q, r, t) = (
+                vertex(a, b),
+                vertex(a + 1, b),
+                vertex(a, b + 1),
+                vertex(a + 1, b + 1),
+            );
+            // Alternate the diagonal, so vertices are shared by 4 or 8 triangles.
+            let quads = if (a + b) % 2 == 0 {
+                [[p, q, t], [p, t, r]]
+            } else {
+                [[p, q, r], [q, t, r]]
+            };
+            for v in quads {
+                writeln!(s, "[[triangles]]\nvertices = {v:?}\nmaterial = \"m\"").unwrap();
+            }
+        }
+    }
+    s
+}
+
+/// A [`vertex_grid_scene`] at 48×36 with a random eye (near the origin or up to 1e4 away),
+/// triangle algorithm and vertex spacing.
+pub fn random_vertex_grid(rng: &mut Rng) -> String {
+    let far = [1.0, 1e4][(rng.next_u64() % 2) as usize];
+    let eye = [0, 1, 2].map(|_| rng.range(-far, far));
+    let algo = ["naive", "moller-trumbore", "watertight"][(rng.next_u64() % 3) as usize];
+    let step = 2 + (rng.next_u64() % 3) as u32;
+    vertex_grid_scene(eye, algo, 48, 36, step)
 }

@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# The A/B guard: builds two commits (default: HEAD~1 as A, the working tree as B), then
+# times them interleaved in one run (A B A B ...), scene by scene and tracer by tracer, and
+# flags every row where B's median frame is more than 10 % slower than A's.
+#
+#     bash benches/ab.sh [A_REV] [B_REV|worktree]          # rounds: ROUNDS=5
+#
+# Scenes: the seed scenes and their shadowed variants; the peers scenes (2, 100k and 1M
+# triangles + 10 spheres, with and without shadows) when bench-out/peers has them
+# (`python3 benches/peer_scene.py`, needs numpy); the mesh scenes when scenes/meshes has
+# them (`bash scenes/fetch-meshes.sh`). Tracers: `cpu` and `gpu` (the default adapter, or
+# GLINT_ADAPTER). Figures are each process's own frame time ("trace" for the GPU, the
+# render time for the CPU), so mesh loading and device start are not counted.
+# Output: a markdown table on stdout and in bench-out/ab/last.md. Exit status 3 when a row
+# is flagged. No other tool is needed than bash, git, cargo, awk and sort.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+a_rev="${1:-HEAD~1}"
+b_rev="${2:-worktree}"
+rounds="${ROUNDS:-5}"
+out=bench-out/ab
+mkdir -p "$out"
+
+build() { # rev -> path of its release binary
+    local rev="$1" dir sha
+    if [ "$rev" = worktree ]; then
+        cargo build --release --locked -q >&2
+        cp target/release/glint "$out/glint-worktree"
+        echo "$out/glint-worktree"
+        return
+    fi
+    sha="$(git rev-parse --short "$rev")"
+    if [ ! -x "$out/glint-$sha" ]; then
+        dir="$out/src-$sha"
+        rm -rf "$dir"
+        git worktree add -f --detach "$dir" "$sha" >&2
+        # One target folder for both builds: the dependencies are built once.
+        (cd "$dir" && CARGO_TARGET_DIR="$PWD/../../../target/ab" cargo build --release --locked -q >&2)
+        cp target/ab/release/glint "$out/glint-$sha"
+        git worktree remove --force "$dir" >&2
+    fi
+    echo "$out/glint-$sha"
+}
+A="$(build "$a_rev")"
+B="$(build "$b_rev")"
+
+scenes=(scenes/sphere.toml scenes/triangle.toml scenes/umbrella.toml scenes/bb8.toml
+    scenes/mitsubishi.toml scenes/bb8-shadows.toml scenes/mitsubishi-shadows.toml)
+for t in 2 100000 1000000; do
+    for s in bench-out/peers/peers_$t.toml bench-out/peers/peers_${t}_noshadow.toml; do
+        [ -f "$s" ] && scenes+=("$s")
+    done
+done
+for s in scenes/bunny.toml scenes/dragon.toml; do
+    [ -f "${s%.toml}.toml" ] && grep -q meshes "$s" && ls scenes/meshes/* >/dev/null 2>&1 && scenes+=("$s")
+done
+
+frame_ms() { # binary scene backend -> the frame time in ms, or "fail"
+    local line
+    line="$("$1" render "$2" -o "$out/frame.png" --size 1024x768 --backend "$3" 2>/dev/null)" || {
+        echo fail
+        return
+    }
+    if [[ "$line" =~ trace\ ([0-9.]+)\ ms ]]; then
+        echo "${BASH_REMATCH[1]}"
+    elif [[ "$line" =~ ,\ ([0-9.]+)\ ms,\ cpu ]]; then
+        echo "${BASH_REMATCH[1]}"
+    else
+        echo fail
+    fi
+}
+median() { tr ' ' '\n' | grep -v '^$' | sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+
+{
+    echo "A = $a_rev ($A), B = $b_rev ($B); $rounds rounds, A B interleaved; $(nproc) cores;"
+    echo "adapter: $("$B" adapters 2>/dev/null | grep -i -m1 -- "${GLINT_ADAPTER:-}" || echo none); $(date -u +%FT%TZ)"
+    echo
+    echo "| scene | tracer | A median ms | B median ms | B / A | |"
+    echo "|---|---|---|---|---|---|"
+} | tee "$out/last.md"
+flagged=0
+for s in "${scenes[@]}"; do
+    for backend in cpu gpu; do
+        ta="" tb=""
+        for _ in $(seq "$rounds"); do
+            ta+=" $(frame_ms "$A" "$s" "$backend")"
+            tb+=" $(frame_ms "$B" "$s" "$backend")"
+        done
+        if [[ "$ta$tb" == *fail* ]]; then
+            echo "| $(basename "$s" .toml) | $backend | – | – | – | failed to render |" | tee -a "$out/last.md"
+            continue
+        fi
+        ma="$(median <<<"$ta")"
+        mb="$(median <<<"$tb")"
+        ratio="$(awk -v a="$ma" -v b="$mb" 'BEGIN {printf "%.3f", b / a}')"
+        flag=""
+        if awk -v r="$ratio" 'BEGIN {exit !(r > 1.10)}'; then
+            flag="**SLOWER > 10 %**"
+            flagged=1
+        fi
+        echo "| $(basename "$s" .toml) | $backend | $ma | $mb | $ratio | $flag |" | tee -a "$out/last.md"
+    done
+done
+[ "$flagged" = 0 ] || exit 3
