@@ -50,6 +50,9 @@ pub struct Row {
     pub pixels_off: usize,
     /// Hit/miss disagreements with the f64 image.
     pub hit_miss: usize,
+    /// GPU rows: whether the image equals the CPU f32 mirror's in every bit (colour,
+    /// hit/miss and t); `None` for the CPU rows.
+    pub equals_cpu_f32: Option<bool>,
 }
 
 /// The whole report.
@@ -120,8 +123,10 @@ pub fn run(
         let primitives = buf.spheres.len() + buf.triangles.len();
         let spec = Specialisation::for_scene(&buf);
         let truth = crate::cpu::render_f64(scene, &buf, spec);
+        let mirror = crate::cpu::render_f32(&buf, spec);
         let mut row = |tracer: &str, times: Vec<f64>, img: &Image, gpu_parts: Option<[f64; 4]>| {
             let d = diff(img, &truth);
+            let equals_cpu_f32 = gpu_parts.map(|_| diff(img, &mirror).bit_exact());
             let med = median(times.clone());
             rows.push(Row {
                 scene: name.clone(),
@@ -142,6 +147,7 @@ pub fn run(
                 rms_err: d.rms,
                 pixels_off: d.differing_pixels,
                 hit_miss: d.hit_miss,
+                equals_cpu_f32,
             });
         };
         if let Some(gpu) = gpu {
@@ -212,12 +218,12 @@ impl Report {
             self.cpu_threads,
             self.runs
         );
-        s += "| scene | tracer | triangles | primitives | BVH build ms | size | median ms (min–max) | Mrays/s | compile ms | upload ms | trace ms | readback ms | max err | RMS err | px ≥1/255 | hit/miss |\n";
-        s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        s += "| scene | tracer | triangles | primitives | BVH build ms | size | median ms (min–max) | Mrays/s | compile ms | upload ms | trace ms | readback ms | max err | RMS err | px ≥1/255 | hit/miss | = CPU f32 |\n";
+        s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         let o = |x: Option<f64>| x.map(|v| format!("{v:.1}")).unwrap_or_else(|| "–".into());
         for r in &self.rows {
             s += &format!(
-                "| {} | {} | {} | {} | {:.1} | {}×{} | {:.1} ({:.1}–{:.1}) | {:.2} | {} | {} | {} | {} | {:.2e} | {:.2e} | {} | {} |\n",
+                "| {} | {} | {} | {} | {:.1} | {}×{} | {:.1} ({:.1}–{:.1}) | {:.2} | {} | {} | {} | {} | {:.2e} | {:.2e} | {} | {} | {} |\n",
                 r.scene,
                 r.tracer,
                 r.triangle,
@@ -236,7 +242,12 @@ impl Report {
                 r.max_err,
                 r.rms_err,
                 r.pixels_off,
-                r.hit_miss
+                r.hit_miss,
+                match r.equals_cpu_f32 {
+                    Some(true) => "every bit",
+                    Some(false) => "**no**",
+                    None => "–",
+                }
             );
         }
         s

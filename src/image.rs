@@ -1,7 +1,7 @@
 //! Images: linear f32 RGB plus the hit distance per pixel, 8-bit output, and PNG files
 //! written so that an interrupted render never leaves half an image.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A rendered frame: per pixel `[r, g, b, t]`, colours linear in [0, 1], `t` the hit
 /// distance of the primary ray or −1 for a miss. Row-major, top row first.
@@ -22,20 +22,20 @@ pub enum ImageError {
     #[error("{0}: unknown image extension: use .png")]
     Extension(std::path::PathBuf),
     /// The file system refused.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: std::path::PathBuf,
         /// The OS error.
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// PNG encoding failed.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Encode {
         /// The file.
         path: std::path::PathBuf,
         /// The encoder's error.
-        source: image::ImageError,
+        error: image::ImageError,
     },
 }
 
@@ -90,9 +90,9 @@ impl Image {
                 image::ExtendedColorType::Rgb8,
                 image::ImageFormat::Png,
             )
-            .map_err(|source| ImageError::Encode {
+            .map_err(|error| ImageError::Encode {
                 path: path.to_owned(),
-                source,
+                error,
             })
         })
     }
@@ -106,23 +106,89 @@ pub fn check_extension(path: &Path) -> Result<(), ImageError> {
     }
 }
 
+/// The temporary file being written now, if any: removed by [`remove_pending_temp`] (the
+/// command line calls it on SIGINT and SIGTERM).
+static PENDING_TEMP: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+
+/// Removes the temporary file that [`write_atomically`] is writing, if any. Safe to call
+/// from a signal-handling thread; the finished output file is never touched.
+pub fn remove_pending_temp() {
+    if let Ok(mut g) = PENDING_TEMP.lock()
+        && let Some(p) = g.take()
+    {
+        let _ = std::fs::remove_file(p);
+    }
+}
+
+/// Where writing to `path` really writes: the final target of a chain of symbolic links
+/// (glint writes through a link and leaves the link in place), else `path` itself.
+pub fn write_target(path: &Path) -> PathBuf {
+    let mut p = path.to_owned();
+    for _ in 0..40 {
+        match std::fs::read_link(&p) {
+            Ok(t) => p = p.parent().unwrap_or(Path::new(".")).join(t),
+            Err(_) => break,
+        }
+    }
+    p
+}
+
+/// The temporary name beside `target`: `.NAME.PID.tmp`, with NAME shortened so the whole
+/// stays within the 255-byte file name limit of common file systems.
+fn temp_path(target: &Path) -> PathBuf {
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let suffix = format!(".{}.tmp", std::process::id());
+    let mut keep = name.len().min(255 - 1 - suffix.len());
+    while !name.is_char_boundary(keep) {
+        keep -= 1;
+    }
+    target.with_file_name(format!(".{}{suffix}", &name[..keep]))
+}
+
+/// Checks, before any work, that `path` can be written: its folder exists and a file can
+/// be created there (the temporary file is created and removed at once).
+pub fn check_writable(path: &Path) -> Result<(), ImageError> {
+    check_extension(path)?;
+    let target = write_target(path);
+    if target.is_dir() {
+        return Err(ImageError::Io {
+            path: path.to_owned(),
+            error: std::io::Error::other("is a folder"),
+        });
+    }
+    let probe = temp_path(&target).with_extension("probe");
+    std::fs::File::create(&probe).map_err(|error| ImageError::Io {
+        path: path.to_owned(),
+        error,
+    })?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
 /// Runs `write` on a temporary path in `path`'s folder and renames the result to `path`;
-/// on failure the temporary file is removed and `path` is untouched.
+/// on failure the temporary file is removed and `path` is untouched. When `path` is a
+/// symbolic link, the file it points to is replaced and the link kept.
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), ImageError>,
 ) -> Result<(), ImageError> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp.png", std::process::id()));
+    let target = write_target(path);
+    let tmp = temp_path(&target);
+    if let Ok(mut g) = PENDING_TEMP.lock() {
+        *g = Some(tmp.clone());
+    }
     let result = write(&tmp).and_then(|()| {
-        std::fs::rename(&tmp, path).map_err(|source| ImageError::Io {
+        std::fs::rename(&tmp, &target).map_err(|error| ImageError::Io {
             path: path.to_owned(),
-            source,
+            error,
         })
     });
+    if let Ok(mut g) = PENDING_TEMP.lock() {
+        *g = None;
+    }
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }

@@ -56,6 +56,9 @@ enum Command {
         /// Use the first Vulkan adapter whose name contains this.
         #[arg(long)]
         adapter: Option<String>,
+        /// Read only files below the scene's own folder (meshes, MTLs; links followed).
+        #[arg(long)]
+        confine: bool,
     },
     /// Render a scene on the GPU and on the CPU mirror and measure the difference.
     Compare {
@@ -70,6 +73,9 @@ enum Command {
         /// Use the first Vulkan adapter whose name contains this.
         #[arg(long)]
         adapter: Option<String>,
+        /// Read only files below the scene's own folder (meshes, MTLs; links followed).
+        #[arg(long)]
+        confine: bool,
         /// Where to write the difference image.
         #[arg(long, default_value = "diff.png")]
         diff: PathBuf,
@@ -93,6 +99,9 @@ enum Command {
         /// Use the first Vulkan adapter whose name contains this.
         #[arg(long)]
         adapter: Option<String>,
+        /// Read only files below the scene's own folder (meshes, MTLs; links followed).
+        #[arg(long)]
+        confine: bool,
         /// Skip the GPU (CPU tracers only).
         #[arg(long)]
         no_gpu: bool,
@@ -164,8 +173,12 @@ impl ProgressBar {
     }
 }
 
-fn load(scene: &Path) -> Result<Scene> {
-    let s = Scene::load(scene)?;
+fn load(scene: &Path, confine: bool) -> Result<Scene> {
+    let s = if confine {
+        Scene::load_confined(scene)?
+    } else {
+        Scene::load(scene)?
+    };
     for w in &s.warnings {
         eprintln!("warning: {w}");
     }
@@ -173,6 +186,12 @@ fn load(scene: &Path) -> Result<Scene> {
 }
 
 fn main() {
+    // SIGINT / SIGTERM: remove the half-written temporary image (the output file itself is
+    // only ever replaced whole), then exit as interrupted.
+    let _ = ctrlc::set_handler(|| {
+        glint::image::remove_pending_temp();
+        std::process::exit(130);
+    });
     if let Err(e) = run(Cli::parse()) {
         eprintln!("error: {e:#}");
         std::process::exit(1);
@@ -188,15 +207,17 @@ fn run(cli: Cli) -> Result<()> {
             size,
             triangle,
             adapter,
+            confine,
         } => {
-            glint::image::check_extension(&output)?;
             if same_file(&scene, &output) {
                 bail!(
                     "{}: the output would overwrite the scene file",
                     output.display()
                 );
             }
-            let s = load(&scene)?;
+            // Before any work: the folder exists and a file can be made there.
+            glint::image::check_writable(&output)?;
+            let s = load(&scene, confine)?;
             let (w, h) = size.unwrap_or(s.size());
             let algo = triangle.unwrap_or(s.triangle);
             let buf = SceneBuffers::new(&s, w, h, algo);
@@ -214,22 +235,36 @@ fn run(cli: Cli) -> Result<()> {
                 ),
                 Backend::Gpu | Backend::Auto => match Gpu::new(adapter.as_deref()) {
                     Ok(gpu) => {
-                        let (img, t) = gpu.kernel.render(
-                            &gpu.device,
-                            &gpu.queue,
-                            &buf,
-                            spec,
-                            &mut |d, n| bar.show(d, n),
-                        )?;
-                        let what = format!(
-                            "gpu: {} (device {:.0} ms, compile {:.0} ms, trace {:.1} ms, readback {:.1} ms)",
-                            gpu.describe(),
-                            gpu.start_time.as_secs_f64() * 1e3,
-                            t.compile.as_secs_f64() * 1e3,
-                            t.trace.as_secs_f64() * 1e3,
-                            t.readback.as_secs_f64() * 1e3
-                        );
-                        (img, what)
+                        match gpu
+                            .kernel
+                            .render(&gpu.device, &gpu.queue, &buf, spec, &mut |d, n| {
+                                bar.show(d, n)
+                            }) {
+                            Ok((img, t)) => {
+                                let what = format!(
+                                    "gpu: {} (device {:.0} ms, compile {:.0} ms, trace {:.1} ms, readback {:.1} ms)",
+                                    gpu.describe(),
+                                    gpu.start_time.as_secs_f64() * 1e3,
+                                    t.compile.as_secs_f64() * 1e3,
+                                    t.trace.as_secs_f64() * 1e3,
+                                    t.readback.as_secs_f64() * 1e3
+                                );
+                                (img, what)
+                            }
+                            // Too large for this device's buffers: the CPU has no such limit.
+                            Err(e @ glint::gpu::GpuError::TooLarge { .. })
+                                if backend == Backend::Auto =>
+                            {
+                                eprintln!("note: {e}; so the CPU tracer renders this");
+                                (
+                                    glint::cpu::render_f32_progress(&buf, spec, &|d, n| {
+                                        bar.show(d, n)
+                                    }),
+                                    "cpu (f32)".to_string(),
+                                )
+                            }
+                            Err(e) => return Err(e.into()),
+                        }
                     }
                     Err(e)
                         if backend == Backend::Auto
@@ -271,7 +306,8 @@ fn run(cli: Cli) -> Result<()> {
             adapter,
             no_gpu,
             triangle,
-        } => bench(scenes, size, triangle, runs, out, adapter, no_gpu),
+            confine,
+        } => bench(scenes, size, triangle, runs, out, adapter, no_gpu, confine),
         Command::Adapters => {
             let list = glint::gpu::adapters();
             if list.is_empty() {
@@ -292,9 +328,10 @@ fn run(cli: Cli) -> Result<()> {
             triangle,
             adapter,
             diff,
+            confine,
         } => {
             glint::image::check_extension(&diff)?;
-            let s = load(&scene)?;
+            let s = load(&scene, confine)?;
             let (w, h) = size.unwrap_or(s.size());
             let algo = triangle.unwrap_or(s.triangle);
             let buf = SceneBuffers::new(&s, w, h, algo);
@@ -338,6 +375,7 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn bench(
     scenes: Vec<PathBuf>,
     size: (u32, u32),
@@ -346,6 +384,7 @@ fn bench(
     out: PathBuf,
     adapter: Option<String>,
     no_gpu: bool,
+    confine: bool,
 ) -> Result<()> {
     if cfg!(debug_assertions) {
         eprintln!("warning: a debug build: build with --release for figures that mean anything");
@@ -364,7 +403,7 @@ fn bench(
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        list.push((name, load(p)?));
+        list.push((name, load(p, confine)?));
     }
     let gpu = if no_gpu {
         None

@@ -6,12 +6,12 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The scene file (or a mesh it names) could not be read.
-    #[error("{file}: cannot read: {source}")]
+    #[error("{file}: cannot read: {error}")]
     Io {
         /// The file.
         file: PathBuf,
-        /// The OS error.
-        source: std::io::Error,
+        /// The OS error (in the message, so not also a `source`: printed once).
+        error: std::io::Error,
     },
     /// The TOML is malformed, or a key is unknown, missing or of the wrong type.
     #[error("{file}:{line}: {key}: {message}")]

@@ -83,13 +83,28 @@ pub(super) fn load(
         mesh: obj_path.clone(),
         message,
     };
-    let bytes = read_mesh_bytes(v, &obj_path).map_err(&fail)?;
-    if let Err(e) = std::str::from_utf8(&bytes) {
-        let text = String::from_utf8_lossy(&bytes);
-        return Err(fail(format!(
-            "not UTF-8 at line {}",
-            line_of(&text, e.valid_up_to())
-        )));
+    let mut bytes = read_mesh_bytes(v, &obj_path).map_err(&fail)?;
+    // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
+    // first line as an unknown keyword.
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
+    let text = match std::str::from_utf8(&bytes) {
+        Ok(t) => t,
+        Err(e) => {
+            let text = String::from_utf8_lossy(&bytes);
+            return Err(fail(format!(
+                "not UTF-8 at line {}",
+                line_of(&text, e.valid_up_to())
+            )));
+        }
+    };
+    for w in scan_obj(text).map_err(&fail)? {
+        warnings.push(format!(
+            "{}:{line}: {key}: {}: {w}",
+            v.path.display(),
+            obj_path.display()
+        ));
     }
     let opts = tobj::LoadOptions {
         triangulate: true,
@@ -100,7 +115,10 @@ pub(super) fn load(
     let obj_dir = obj_path.parent().unwrap_or(Path::new(".")).to_owned();
     let mtl_problem = std::cell::RefCell::new(None::<String>);
     let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(&bytes[..]), &opts, |p| {
-        let mtl = (v.read)(&obj_dir.join(p)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let mtl = (v.read)(&obj_dir.join(p)).map_err(|e| {
+            *mtl_problem.borrow_mut() = Some(format!("MTL {}: {e}", obj_dir.join(p).display()));
+            tobj::LoadError::OpenFileFailed
+        })?;
         if let Some(line) = short_colour_line(&mtl) {
             *mtl_problem.borrow_mut() = Some(format!(
                 "{}: line {line}: a colour (Ka, Kd, Ks, Ke) needs three numbers",
@@ -150,6 +168,17 @@ pub(super) fn load(
             return Err(fail(format!(
                 "MTL material {:?} has a negative or non-finite value",
                 mm.name
+            )));
+        }
+        if [ka, kd, ks]
+            .iter()
+            .flatten()
+            .any(|&x| x > super::MAX_COLOUR)
+        {
+            return Err(fail(format!(
+                "MTL material {:?} has a colour component above {:e}",
+                mm.name,
+                super::MAX_COLOUR
             )));
         }
         materials.push(Material {
@@ -250,6 +279,82 @@ pub(super) fn load(
     Ok(())
 }
 
+/// Checks the OBJ lines tobj would reject without saying where, or drop in silence:
+/// `v` without three numbers and face indices that are not integers, are 0 or point past
+/// the vertices defined so far are errors naming the line; a face of fewer than three
+/// vertices is a warning naming the line (tobj drops it). Returns the warnings.
+pub fn scan_obj(text: &str) -> Result<Vec<String>, String> {
+    let mut warnings = Vec::new();
+    let mut vertices: i64 = 0;
+    let mut short_faces = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line_no = n + 1;
+        let l = line.trim_start();
+        let Some(kw) = l.split_ascii_whitespace().next() else {
+            continue;
+        };
+        match kw {
+            "v" => {
+                let ok = l[1..]
+                    .split_ascii_whitespace()
+                    .take(3)
+                    .filter(|w| w.parse::<f32>().is_ok())
+                    .count();
+                if ok < 3 {
+                    return Err(format!(
+                        "line {line_no}: a vertex (`v`) needs three numbers: {:?}",
+                        trunc(l)
+                    ));
+                }
+                vertices += 1;
+            }
+            "f" => {
+                let mut count = 0;
+                for w in l[1..].split_ascii_whitespace() {
+                    let first = w.split('/').next().unwrap_or("");
+                    let ix: i64 = first.parse().map_err(|_| {
+                        format!("line {line_no}: face vertex {w:?} is not an index")
+                    })?;
+                    let ok = if ix > 0 {
+                        ix <= vertices
+                    } else {
+                        ix < 0 && -ix <= vertices
+                    };
+                    if !ok {
+                        return Err(format!(
+                            "line {line_no}: face vertex index {ix} is out of range ({vertices} vertices defined before it)"
+                        ));
+                    }
+                    count += 1;
+                }
+                if count < 3 {
+                    short_faces.push(line_no);
+                }
+            }
+            _ => {}
+        }
+    }
+    if let Some(first) = short_faces.first() {
+        warnings.push(format!(
+            "{} face(s) with fewer than three vertices dropped (line {first}{})",
+            short_faces.len(),
+            if short_faces.len() > 1 {
+                " and others"
+            } else {
+                ""
+            }
+        ));
+    }
+    Ok(warnings)
+}
+
+fn trunc(s: &str) -> &str {
+    match s.char_indices().nth(60) {
+        Some((k, _)) => &s[..k],
+        None => s,
+    }
+}
+
 /// The first line (1-based) of an MTL whose Ka, Kd, Ks or Ke has fewer than three
 /// values: tobj 4 panics on those, so they are refused before it sees them.
 fn short_colour_line(mtl: &[u8]) -> Option<usize> {
@@ -267,10 +372,18 @@ fn read_mesh_bytes(v: &Validator<'_>, path: &Path) -> Result<Vec<u8>, String> {
     let raw = (v.read)(path)?;
     if path.extension().is_some_and(|e| e == "gz") {
         use std::io::Read;
+        let limit = super::max_input_bytes();
         let mut out = Vec::new();
         flate2::read::GzDecoder::new(&raw[..])
+            .take(limit + 1)
             .read_to_end(&mut out)
             .map_err(|e| format!("cannot gunzip: {e}"))?;
+        if out.len() as u64 > limit {
+            return Err(format!(
+                "unpacks to more than the input limit of {} MiB (set GLINT_MAX_INPUT_MIB to raise it)",
+                limit >> 20
+            ));
+        }
         return Ok(out);
     }
     Ok(raw)

@@ -179,9 +179,17 @@ impl Scene {
     /// Reads and validates the scene file at `path` (meshes relative to it).
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
-            file: path.to_owned(),
-            source,
+        let bytes = read_limited(path, max_input_bytes()).map_err(|e| match e {
+            ReadError::Io(error) => SceneError::Io {
+                file: path.to_owned(),
+                error,
+            },
+            other => SceneError::Syntax {
+                file: path.to_owned(),
+                line: 1,
+                key: "(file)".into(),
+                message: other.to_string(),
+            },
         })?;
         let src = String::from_utf8(bytes).map_err(|e| {
             let pos = e.utf8_error().valid_up_to();
@@ -194,6 +202,29 @@ impl Scene {
             }
         })?;
         Scene::parse(&src, path)
+    }
+
+    /// [`Scene::load`] in confined mode: the scene may read only files below its own folder
+    /// (after following symbolic links); a mesh or MTL anywhere else is an error naming it.
+    pub fn load_confined(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let root = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let root = std::fs::canonicalize(root).map_err(|error| SceneError::Io {
+            file: root.to_owned(),
+            error,
+        })?;
+        let bytes = read_limited(path, max_input_bytes()).map_err(|e| SceneError::Syntax {
+            file: path.to_owned(),
+            line: 1,
+            key: "(file)".into(),
+            message: e.to_string(),
+        })?;
+        let src = String::from_utf8_lossy(&bytes).into_owned();
+        let read = confined_reader(root);
+        Scene::parse_with(&src, path, &read)
     }
 
     /// Parses and validates scene text; `path` names it in errors and anchors mesh paths.
@@ -243,6 +274,13 @@ fn syntax_error(src: &str, path: &Path, e: &toml::de::Error) -> SceneError {
     }
 }
 
+/// The largest colour component (light colour, ka, kd, ks, ambient, background) a scene
+/// may give. Shading sums, per light, products of a light colour and a reflectance: with
+/// both at most 1e6, a term is at most 1e12 and no sum of them overflows f32 (an infinite
+/// term times a zero factor would make NaN, written as black). Every physical scene is far
+/// below it.
+pub const MAX_COLOUR: f32 = 1e6;
+
 /// Checks values and turns the file's structs into the scene's.
 struct Validator<'a> {
     src: &'a str,
@@ -253,9 +291,109 @@ struct Validator<'a> {
 /// How a scene reads the files it names (meshes and their MTLs): the bytes, or a message.
 pub type ReadFile<'a> = dyn Fn(&Path) -> Result<Vec<u8>, String> + 'a;
 
-/// [`ReadFile`] from the file system.
+/// [`ReadFile`] from the file system: regular files only, at most [`max_input_bytes`].
 pub fn read_from_disk(path: &Path) -> Result<Vec<u8>, String> {
-    std::fs::read(path).map_err(|e| format!("cannot read: {e}"))
+    read_limited(path, max_input_bytes()).map_err(|e| e.to_string())
+}
+
+/// A [`ReadFile`] that reads only files whose real path (symbolic links followed) lies
+/// below `root`, which must itself be canonical.
+pub fn confined_reader(root: PathBuf) -> impl Fn(&Path) -> Result<Vec<u8>, String> {
+    move |path: &Path| {
+        let real = std::fs::canonicalize(path).map_err(|e| format!("cannot read: {e}"))?;
+        if !real.starts_with(&root) {
+            return Err(format!(
+                "{} is outside the scene's folder {} (--confine)",
+                real.display(),
+                root.display()
+            ));
+        }
+        read_from_disk(&real)
+    }
+}
+
+/// The default of [`max_input_bytes`]: 2 GiB, twice the largest mesh glint is meant for
+/// (an OBJ of about 15 million triangles).
+pub const DEFAULT_MAX_INPUT_MIB: u64 = 2048;
+
+/// The most bytes glint reads from one input file, and the most it unpacks from one
+/// `.gz`: `GLINT_MAX_INPUT_MIB` (MiB) when set to a number, else
+/// [`DEFAULT_MAX_INPUT_MIB`]. It keeps `/dev/zero`, `/dev/urandom` or a gzip bomb from
+/// filling memory.
+pub fn max_input_bytes() -> u64 {
+    std::env::var("GLINT_MAX_INPUT_MIB")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .unwrap_or(DEFAULT_MAX_INPUT_MIB)
+        .saturating_mul(1 << 20)
+}
+
+/// Why an input file was not read.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// The OS refused.
+    #[error("cannot read: {0}")]
+    Io(std::io::Error),
+    /// A FIFO, a device, a socket or a folder: glint reads regular files only (a named pipe
+    /// would block forever, a device never ends).
+    #[error("not a regular file (it is {0}): glint reads only regular files")]
+    NotRegular(&'static str),
+    /// Longer than the limit.
+    #[error(
+        "larger than the input limit of {} MiB (set GLINT_MAX_INPUT_MIB to raise it)",
+        .0 >> 20
+    )]
+    TooLarge(u64),
+}
+
+fn kind_of(t: std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a named pipe";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_dir() { "a folder" } else { "not a file" }
+}
+
+/// Reads a regular file of at most `limit` bytes. The type is checked before the file is
+/// opened (opening a named pipe blocks) and again on the open file.
+pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path).map_err(ReadError::Io)?;
+    if !meta.is_file() {
+        return Err(ReadError::NotRegular(kind_of(meta.file_type())));
+    }
+    let mut opts = std::fs::OpenOptions::new();
+    opts.read(true);
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        opts.custom_flags(0o4000); // O_NONBLOCK: a FIFO swapped in after the check does not block
+    }
+    let file = opts.open(path).map_err(ReadError::Io)?;
+    let meta = file.metadata().map_err(ReadError::Io)?;
+    if !meta.is_file() {
+        return Err(ReadError::NotRegular(kind_of(meta.file_type())));
+    }
+    if meta.len() > limit {
+        return Err(ReadError::TooLarge(limit));
+    }
+    let mut out = Vec::with_capacity(meta.len() as usize);
+    file.take(limit + 1)
+        .read_to_end(&mut out)
+        .map_err(ReadError::Io)?;
+    if out.len() as u64 > limit {
+        return Err(ReadError::TooLarge(limit));
+    }
+    Ok(out)
 }
 
 impl Validator<'_> {
@@ -285,6 +423,13 @@ impl Validator<'_> {
         let a = self.finite3(v, key)?;
         if a.iter().any(|&x| x < 0.0) {
             return self.err(v.span(), key, format!("{a:?} has a negative component"));
+        }
+        if a.iter().any(|&x| x > MAX_COLOUR) {
+            return self.err(
+                v.span(),
+                key,
+                format!("{a:?} has a component above {MAX_COLOUR:e}, more than shading can add up in f32 without overflow"),
+            );
         }
         Ok(a)
     }

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The seed scenes' bench on both lavapipes in one run: `glint bench` on the system's Vulkan
+# driver, then on Mesa >= 25's lavapipe (`.ci/lavapipe.sh`), then one side-by-side table of
+# the GPU rows (each column headed by the driver the adapter reports) with the CPU tracers'
+# rows from the same run:
+#
+#     bash benches/drivers.sh [OUT]        # default OUT: bench-out/drivers; RUNS=5
+#
+# Writes OUT/system/, OUT/mesa25/ (each glint bench's report.md, .json, plot) and
+# OUT/drivers.md. Needs python3 (standard library only) for the table.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out="${1:-bench-out/drivers}"
+runs="${RUNS:-5}"
+mkdir -p "$out"
+cargo build --release --locked -q
+export GLINT_ADAPTER="${GLINT_ADAPTER:-llvmpipe}"
+./target/release/glint bench --runs "$runs" --out "$out/system" --adapter "$GLINT_ADAPTER" >/dev/null
+(
+    eval "$(bash .ci/lavapipe.sh)"
+    ./target/release/glint bench --runs "$runs" --out "$out/mesa25" --adapter "$GLINT_ADAPTER" >/dev/null
+)
+python3 - "$out" <<'PY' | tee "$out/drivers.md"
+import json, sys
+out = sys.argv[1]
+a = json.load(open(f"{out}/system/report.json"))
+b = json.load(open(f"{out}/mesa25/report.json"))
+def driver(r):
+    d = r["adapter"]
+    return d[d.find("Mesa"):].split(" (")[0] if "Mesa" in d else d
+key = lambda r: (r["scene"], r["tracer"], r["triangle"])
+rb = {key(r): r for r in b["rows"]}
+print(f"Seed scenes at {a['rows'][0]['size'][0]}×{a['rows'][0]['size'][1]}, median of {a['runs']} runs "
+      f"after a warm-up, CPU tracers on {a['cpu_threads']} threads. GPU: lavapipe, a CPU Vulkan.\n")
+print(f"| scene | triangles | GPU {driver(a)} ms | GPU {driver(b)} ms | CPU f32 ms | CPU f64 ms "
+      f"| GPU = CPU f32 (both drivers) | largest error vs f64 | px ≥ 1/255 |")
+print("|---|---|---|---|---|---|---|---|---|")
+rows = {key(r): r for r in a["rows"]}
+for r in a["rows"]:
+    if r["tracer"] != "gpu":
+        continue
+    k = key(r)
+    cpu = rows.get((k[0], "cpu-f32", k[2]))
+    f64 = rows.get((k[0], "cpu-f64", k[2]))
+    other = rb.get(k)
+    same = " / ".join("every bit" if x and x.get("equals_cpu_f32") else "NO" for x in (r, other))
+    print(f"| {k[0]} | {k[2]} | {r['median_ms']:.1f} | {other['median_ms'] if other else float('nan'):.1f} "
+          f"| {cpu['median_ms'] if cpu else float('nan'):.1f} | {f64['median_ms'] if f64 else float('nan'):.1f} "
+          f"| {same} | {r['max_err']:.1e} | {r['pixels_off']} |")
+PY

@@ -1,0 +1,302 @@
+//! Hostile input, each class with its generator (nothing large is committed): files that
+//! are not regular (a named pipe, `/dev/zero`), inputs over the size limit and gzip bombs,
+//! OBJ errors with their line, a byte-order mark, truncated faces, huge colours, files
+//! outside a confined scene's folder, the output checked before work, written through a
+//! symbolic link, and its temporary file removed on SIGTERM.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use glint::scene::Scene;
+
+const GLINT: &str = env!("CARGO_BIN_EXE_glint");
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("glint-hostile-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const HEAD: &str = r#"[camera]
+eye = [0.0, 0.0, 5.0]
+look_at = [0.0, 0.0, 0.0]
+fov = 45.0
+width = 64
+height = 48
+[[lights]]
+position = [2.0, 2.0, 5.0]
+color = [1.0, 1.0, 1.0]
+[materials.m]
+model = "diffuse"
+ka = [0.2, 0.2, 0.2]
+kd = [0.8, 0.8, 0.8]
+"#;
+
+/// A scene in `d` whose one mesh is `file`.
+fn mesh_scene(d: &Path, name: &str, file: &str) -> PathBuf {
+    let p = d.join(format!("{name}.toml"));
+    std::fs::write(
+        &p,
+        format!("{HEAD}[[meshes]]\nfile = {file:?}\nmaterial = \"m\"\n"),
+    )
+    .unwrap();
+    p
+}
+
+const TRIANGLE_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+/// Loads with a deadline: a hang fails the test instead of blocking the suite.
+fn load_within(path: &Path, secs: u64) -> Result<Scene, String> {
+    let p = path.to_owned();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(Scene::load(&p).map_err(|e| e.to_string()));
+    });
+    rx.recv_timeout(Duration::from_secs(secs))
+        .unwrap_or_else(|_| panic!("{}: loading hangs", path.display()))
+}
+
+#[test]
+fn named_pipes_and_devices_are_refused_without_reading() {
+    let d = dir("special");
+    let fifo = d.join("pipe.obj");
+    assert!(
+        Command::new("mkfifo").arg(&fifo).status().unwrap().success(),
+        "mkfifo"
+    );
+    let e = load_within(&mesh_scene(&d, "fifo", "pipe.obj"), 10).unwrap_err();
+    assert!(e.contains("named pipe") && e.contains(":15: meshes[0].file"), "{e}");
+    for dev in ["/dev/zero", "/dev/urandom"] {
+        let e = load_within(&mesh_scene(&d, "dev", dev), 10).unwrap_err();
+        assert!(e.contains("not a regular file (it is a device)"), "{e}");
+    }
+    // An MTL that is a device: the real cause, not "open file failed".
+    std::fs::write(d.join("m.obj"), format!("mtllib /dev/zero\n{TRIANGLE_OBJ}")).unwrap();
+    let p = d.join("mtl.toml");
+    std::fs::write(&p, format!("{HEAD}[[meshes]]\nfile = \"m.obj\"\n")).unwrap();
+    let e = load_within(&p, 10).unwrap_err();
+    assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
+    // The twin: the same scene with a regular file loads.
+    std::fs::write(d.join("ok.obj"), TRIANGLE_OBJ).unwrap();
+    assert_eq!(
+        load_within(&mesh_scene(&d, "ok", "ok.obj"), 10)
+            .unwrap()
+            .triangles
+            .len(),
+        1
+    );
+}
+
+#[test]
+fn inputs_over_the_limit_fail_naming_file_and_limit() {
+    let d = dir("limits");
+    // A 2 MiB OBJ and a gzip that unpacks to 3 MiB, against a 1 MiB limit.
+    let big = TRIANGLE_OBJ.repeat(2 * 1024 * 1024 / TRIANGLE_OBJ.len() + 1);
+    std::fs::write(d.join("big.obj"), &big).unwrap();
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    std::io::Write::write_all(&mut gz, &vec![b'#'; 3 << 20]).unwrap();
+    std::fs::write(d.join("bomb.obj.gz"), gz.finish().unwrap()).unwrap();
+    let run = |scene: &Path, limit: &str| {
+        Command::new(GLINT)
+            .args(["render", scene.to_str().unwrap(), "-o"])
+            .arg(d.join("out.png"))
+            .args(["--backend", "cpu"])
+            .env("GLINT_MAX_INPUT_MIB", limit)
+            .output()
+            .unwrap()
+    };
+    for (name, file, what) in [
+        ("big", "big.obj", "larger than the input limit of 1 MiB"),
+        ("bomb", "bomb.obj.gz", "unpacks to more than the input limit of 1 MiB"),
+    ] {
+        let scene = mesh_scene(&d, name, file);
+        let out = run(&scene, "1");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(what), "{name}: {err}");
+        assert!(err.contains(file) && err.contains("GLINT_MAX_INPUT_MIB"), "{err}");
+        // The twin: a raised limit reads it (the bomb is all comments: no triangles).
+        let out = run(&scene, "8");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("input limit"), "{name} with 8 MiB: {err}");
+    }
+}
+
+#[test]
+fn obj_errors_name_their_line_and_a_bom_is_accepted() {
+    let d = dir("obj");
+    let cases = [
+        ("v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3\n", "line 2: a vertex"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 4\n", "line 5: face vertex index 4"),
+        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 two 3\n", "line 4: face vertex \"two\""),
+    ];
+    for (k, (obj, want)) in cases.iter().enumerate() {
+        std::fs::write(d.join(format!("{k}.obj")), obj).unwrap();
+        let e = Scene::load(mesh_scene(&d, &format!("s{k}"), &format!("{k}.obj")))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(want) && e.contains(&format!("{k}.obj")), "{e}");
+    }
+    // A byte-order mark, and a truncated face: loaded, with a warning naming the line.
+    std::fs::write(
+        d.join("bom.obj"),
+        format!("\u{feff}{TRIANGLE_OBJ}f 1 2\n"),
+    )
+    .unwrap();
+    let s = Scene::load(mesh_scene(&d, "bom", "bom.obj")).unwrap();
+    assert_eq!(s.triangles.len(), 1);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("fewer than three vertices dropped (line 5)")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
+fn a_missing_file_says_its_os_error_once() {
+    let out = Command::new(GLINT)
+        .args(["render", "/nonexistent/x.toml", "-o", "/tmp/x.png"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("os error 2").count(), 1, "{err}");
+}
+
+#[test]
+fn huge_colours_are_refused_with_their_key() {
+    for (key, value) in [("color", "[1e30, 1.0, 1.0]"), ("kd", "[1e7, 0.0, 0.0]")] {
+        let src = HEAD
+            .replace("color = [1.0, 1.0, 1.0]", &format!("color = {}", if key == "color" { value } else { "[1.0, 1.0, 1.0]" }))
+            .replace("kd = [0.8, 0.8, 0.8]", &format!("kd = {}", if key == "kd" { value } else { "[0.8, 0.8, 0.8]" }));
+        let e = Scene::parse(&src, Path::new("huge.toml")).unwrap_err().to_string();
+        assert!(e.contains(key) && e.contains("above 1e6"), "{e}");
+    }
+    // The twin: the largest allowed colour shades without NaN (white where lit).
+    let src = HEAD.replace("color = [1.0, 1.0, 1.0]", "color = [1e6, 1e6, 1e6]")
+        + "[[spheres]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\nmaterial = \"m\"\n";
+    let scene = Scene::parse(&src, Path::new("max.toml")).unwrap();
+    let buf = glint::buffers::SceneBuffers::new(&scene, 64, 48, scene.triangle);
+    let spec = glint::buffers::Specialisation::for_scene(&buf);
+    for img in [
+        glint::cpu::render_f32(&buf, spec),
+        glint::cpu::render_f64(&scene, &buf, spec),
+    ] {
+        assert!(img.pixels.iter().all(|p| p.iter().all(|x| !x.is_nan())));
+        assert_eq!(img.pixels[24 * 64 + 32][..3], [1.0, 1.0, 1.0]);
+    }
+}
+
+#[test]
+fn confined_scenes_read_only_below_their_folder() {
+    let d = dir("confine");
+    let sub = d.join("sub");
+    std::fs::create_dir_all(&sub).unwrap();
+    std::fs::write(d.join("outside.obj"), TRIANGLE_OBJ).unwrap();
+    std::fs::write(sub.join("inside.obj"), TRIANGLE_OBJ).unwrap();
+    std::os::unix::fs::symlink("../outside.obj", sub.join("link.obj")).unwrap();
+    std::fs::write(sub.join("m.obj"), format!("mtllib ../x.mtl\n{TRIANGLE_OBJ}")).unwrap();
+    std::fs::write(d.join("x.mtl"), "newmtl a\nKd 1 0 0\n").unwrap();
+    let abs = d.join("outside.obj");
+    for file in ["../outside.obj", abs.to_str().unwrap(), "link.obj"] {
+        let scene = mesh_scene(&sub, "s", file);
+        let e = Scene::load_confined(&scene).unwrap_err().to_string();
+        assert!(e.contains("outside the scene's folder"), "{file}: {e}");
+        assert!(Scene::load(&scene).is_ok(), "{file}: unconfined loads");
+    }
+    let p = sub.join("mtl.toml");
+    std::fs::write(&p, format!("{HEAD}[[meshes]]\nfile = \"m.obj\"\n")).unwrap();
+    let e = Scene::load_confined(&p).unwrap_err().to_string();
+    assert!(e.contains("x.mtl") && e.contains("outside the scene's folder"), "{e}");
+    // The twin: a mesh inside the folder loads confined.
+    assert!(Scene::load_confined(mesh_scene(&sub, "in", "inside.obj")).is_ok());
+}
+
+#[test]
+fn output_is_checked_before_work_and_written_through_links() {
+    let d = dir("output");
+    std::fs::write(d.join("t.obj"), TRIANGLE_OBJ).unwrap();
+    let scene = mesh_scene(&d, "s", "t.obj");
+    let render = |out: &Path, size: &str| {
+        let t0 = Instant::now();
+        let o = Command::new(GLINT)
+            .args(["render", scene.to_str().unwrap(), "-o"])
+            .arg(out)
+            .args(["--backend", "cpu", "--size", size])
+            .output()
+            .unwrap();
+        (o, t0.elapsed())
+    };
+    // A missing folder fails at once, before a large frame is rendered.
+    let (o, dt) = render(&d.join("missing/out.png"), "8192x8192");
+    assert!(!o.status.success(), "a missing folder must fail");
+    assert!(dt < Duration::from_secs(3), "failed only after {dt:?} of work");
+    // A 250-character name is legal, temporary name and all.
+    let long = d.join(format!("{}.png", "x".repeat(246)));
+    let (o, _) = render(&long, "64x48");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(long.is_file());
+    // A symbolic link: written through, the link kept.
+    std::fs::create_dir_all(d.join("real")).unwrap();
+    std::os::unix::fs::symlink("real/target.png", d.join("link.png")).unwrap();
+    let (o, _) = render(&d.join("link.png"), "64x48");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let meta = std::fs::symlink_metadata(d.join("link.png")).unwrap();
+    assert!(meta.file_type().is_symlink(), "the link was replaced");
+    assert!(d.join("real/target.png").is_file());
+    // No temporary file is left anywhere.
+    for dirp in [d.clone(), d.join("real")] {
+        for e in std::fs::read_dir(dirp).unwrap() {
+            let n = e.unwrap().file_name().to_string_lossy().into_owned();
+            assert!(!n.ends_with(".tmp"), "left behind: {n}");
+        }
+    }
+}
+
+/// SIGTERM while the PNG is being encoded (sent as soon as the temporary file appears):
+/// the process ends, and the temporary file is gone. The twin: SIGKILL, which no handler
+/// sees, at the same moment leaves it behind, so the test does catch a leftover.
+#[test]
+fn sigterm_during_encoding_leaves_no_temporary_file() {
+    let d = dir("signal");
+    std::fs::write(d.join("t.obj"), TRIANGLE_OBJ).unwrap();
+    let scene = mesh_scene(&d, "s", "t.obj");
+    let tmp_files = || -> Vec<String> {
+        std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".tmp"))
+            .collect()
+    };
+    for signal in ["-TERM", "-KILL"] {
+        let mut child = Command::new(GLINT)
+            .args(["render", scene.to_str().unwrap(), "-o"])
+            .arg(d.join("out.png"))
+            .args(["--backend", "cpu", "--size", "4096x4096"])
+            .stderr(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let t0 = Instant::now();
+        while tmp_files().is_empty() {
+            assert!(t0.elapsed() < Duration::from_secs(60), "no temporary file appeared");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        let status = child.wait().unwrap();
+        assert!(!status.success(), "{signal}: the render was not interrupted");
+        let left = tmp_files();
+        if signal == "-TERM" {
+            assert!(left.is_empty(), "after SIGTERM: {left:?} left behind");
+            assert!(!d.join("out.png").exists(), "a half image became the output");
+        } else {
+            assert_eq!(left.len(), 1, "SIGKILL must leave the temporary file: {left:?}");
+            std::fs::remove_file(d.join(&left[0])).unwrap();
+        }
+    }
+}
