@@ -133,14 +133,14 @@ pub fn write_target(path: &Path) -> PathBuf {
     p
 }
 
-/// The temporary name beside `target`: `.NAME.PID.tmp`, with NAME shortened so the whole
+/// The temporary name beside `target`: `.NAME.PID.KIND`, with NAME shortened so the whole
 /// stays within the 255-byte file name limit of common file systems.
-fn temp_path(target: &Path) -> PathBuf {
+fn temp_path(target: &Path, kind: &str) -> PathBuf {
     let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let suffix = format!(".{}.tmp", std::process::id());
+    let suffix = format!(".{}.{kind}", std::process::id());
     let mut keep = name.len().min(255 - 1 - suffix.len());
     while !name.is_char_boundary(keep) {
         keep -= 1;
@@ -159,7 +159,7 @@ pub fn check_writable(path: &Path) -> Result<(), ImageError> {
             error: std::io::Error::other("is a folder"),
         });
     }
-    let probe = temp_path(&target).with_extension("probe");
+    let probe = temp_path(&target, "probe");
     std::fs::File::create(&probe).map_err(|error| ImageError::Io {
         path: path.to_owned(),
         error,
@@ -176,7 +176,7 @@ pub fn write_atomically(
     write: impl FnOnce(&Path) -> Result<(), ImageError>,
 ) -> Result<(), ImageError> {
     let target = write_target(path);
-    let tmp = temp_path(&target);
+    let tmp = temp_path(&target, "tmp");
     if let Ok(mut g) = PENDING_TEMP.lock() {
         *g = Some(tmp.clone());
     }

@@ -63,11 +63,18 @@ fn named_pipes_and_devices_are_refused_without_reading() {
     let d = dir("special");
     let fifo = d.join("pipe.obj");
     assert!(
-        Command::new("mkfifo").arg(&fifo).status().unwrap().success(),
+        Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success(),
         "mkfifo"
     );
     let e = load_within(&mesh_scene(&d, "fifo", "pipe.obj"), 10).unwrap_err();
-    assert!(e.contains("named pipe") && e.contains(":15: meshes[0].file"), "{e}");
+    assert!(
+        e.contains("named pipe") && e.contains(":15: meshes[0].file"),
+        "{e}"
+    );
     for dev in ["/dev/zero", "/dev/urandom"] {
         let e = load_within(&mesh_scene(&d, "dev", dev), 10).unwrap_err();
         assert!(e.contains("not a regular file (it is a device)"), "{e}");
@@ -77,7 +84,10 @@ fn named_pipes_and_devices_are_refused_without_reading() {
     let p = d.join("mtl.toml");
     std::fs::write(&p, format!("{HEAD}[[meshes]]\nfile = \"m.obj\"\n")).unwrap();
     let e = load_within(&p, 10).unwrap_err();
-    assert!(e.contains("/dev/zero") && e.contains("not a regular file"), "{e}");
+    assert!(
+        e.contains("/dev/zero") && e.contains("not a regular file"),
+        "{e}"
+    );
     // The twin: the same scene with a regular file loads.
     std::fs::write(d.join("ok.obj"), TRIANGLE_OBJ).unwrap();
     assert_eq!(
@@ -109,13 +119,20 @@ fn inputs_over_the_limit_fail_naming_file_and_limit() {
     };
     for (name, file, what) in [
         ("big", "big.obj", "larger than the input limit of 1 MiB"),
-        ("bomb", "bomb.obj.gz", "unpacks to more than the input limit of 1 MiB"),
+        (
+            "bomb",
+            "bomb.obj.gz",
+            "unpacks to more than the input limit of 1 MiB",
+        ),
     ] {
         let scene = mesh_scene(&d, name, file);
         let out = run(&scene, "1");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && err.contains(what), "{name}: {err}");
-        assert!(err.contains(file) && err.contains("GLINT_MAX_INPUT_MIB"), "{err}");
+        assert!(
+            err.contains(file) && err.contains("GLINT_MAX_INPUT_MIB"),
+            "{err}"
+        );
         // The twin: a raised limit reads it (the bomb is all comments: no triangles).
         let out = run(&scene, "8");
         let err = String::from_utf8_lossy(&out.stderr);
@@ -128,8 +145,14 @@ fn obj_errors_name_their_line_and_a_bom_is_accepted() {
     let d = dir("obj");
     let cases = [
         ("v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3\n", "line 2: a vertex"),
-        ("v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 4\n", "line 5: face vertex index 4"),
-        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 two 3\n", "line 4: face vertex \"two\""),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 4\n",
+            "line 5: face vertex index 4",
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 two 3\n",
+            "line 4: face vertex \"two\"",
+        ),
     ];
     for (k, (obj, want)) in cases.iter().enumerate() {
         std::fs::write(d.join(format!("{k}.obj")), obj).unwrap();
@@ -139,11 +162,7 @@ fn obj_errors_name_their_line_and_a_bom_is_accepted() {
         assert!(e.contains(want) && e.contains(&format!("{k}.obj")), "{e}");
     }
     // A byte-order mark, and a truncated face: loaded, with a warning naming the line.
-    std::fs::write(
-        d.join("bom.obj"),
-        format!("\u{feff}{TRIANGLE_OBJ}f 1 2\n"),
-    )
-    .unwrap();
+    std::fs::write(d.join("bom.obj"), format!("\u{feff}{TRIANGLE_OBJ}f 1 2\n")).unwrap();
     let s = Scene::load(mesh_scene(&d, "bom", "bom.obj")).unwrap();
     assert_eq!(s.triangles.len(), 1);
     assert!(
@@ -169,9 +188,31 @@ fn a_missing_file_says_its_os_error_once() {
 fn huge_colours_are_refused_with_their_key() {
     for (key, value) in [("color", "[1e30, 1.0, 1.0]"), ("kd", "[1e7, 0.0, 0.0]")] {
         let src = HEAD
-            .replace("color = [1.0, 1.0, 1.0]", &format!("color = {}", if key == "color" { value } else { "[1.0, 1.0, 1.0]" }))
-            .replace("kd = [0.8, 0.8, 0.8]", &format!("kd = {}", if key == "kd" { value } else { "[0.8, 0.8, 0.8]" }));
-        let e = Scene::parse(&src, Path::new("huge.toml")).unwrap_err().to_string();
+            .replace(
+                "color = [1.0, 1.0, 1.0]",
+                &format!(
+                    "color = {}",
+                    if key == "color" {
+                        value
+                    } else {
+                        "[1.0, 1.0, 1.0]"
+                    }
+                ),
+            )
+            .replace(
+                "kd = [0.8, 0.8, 0.8]",
+                &format!(
+                    "kd = {}",
+                    if key == "kd" {
+                        value
+                    } else {
+                        "[0.8, 0.8, 0.8]"
+                    }
+                ),
+            );
+        let e = Scene::parse(&src, Path::new("huge.toml"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains(key) && e.contains("above 1e6"), "{e}");
     }
     // The twin: the largest allowed colour shades without NaN (white where lit).
@@ -197,7 +238,11 @@ fn confined_scenes_read_only_below_their_folder() {
     std::fs::write(d.join("outside.obj"), TRIANGLE_OBJ).unwrap();
     std::fs::write(sub.join("inside.obj"), TRIANGLE_OBJ).unwrap();
     std::os::unix::fs::symlink("../outside.obj", sub.join("link.obj")).unwrap();
-    std::fs::write(sub.join("m.obj"), format!("mtllib ../x.mtl\n{TRIANGLE_OBJ}")).unwrap();
+    std::fs::write(
+        sub.join("m.obj"),
+        format!("mtllib ../x.mtl\n{TRIANGLE_OBJ}"),
+    )
+    .unwrap();
     std::fs::write(d.join("x.mtl"), "newmtl a\nKd 1 0 0\n").unwrap();
     let abs = d.join("outside.obj");
     for file in ["../outside.obj", abs.to_str().unwrap(), "link.obj"] {
@@ -209,7 +254,10 @@ fn confined_scenes_read_only_below_their_folder() {
     let p = sub.join("mtl.toml");
     std::fs::write(&p, format!("{HEAD}[[meshes]]\nfile = \"m.obj\"\n")).unwrap();
     let e = Scene::load_confined(&p).unwrap_err().to_string();
-    assert!(e.contains("x.mtl") && e.contains("outside the scene's folder"), "{e}");
+    assert!(
+        e.contains("x.mtl") && e.contains("outside the scene's folder"),
+        "{e}"
+    );
     // The twin: a mesh inside the folder loads confined.
     assert!(Scene::load_confined(mesh_scene(&sub, "in", "inside.obj")).is_ok());
 }
@@ -232,7 +280,10 @@ fn output_is_checked_before_work_and_written_through_links() {
     // A missing folder fails at once, before a large frame is rendered.
     let (o, dt) = render(&d.join("missing/out.png"), "8192x8192");
     assert!(!o.status.success(), "a missing folder must fail");
-    assert!(dt < Duration::from_secs(3), "failed only after {dt:?} of work");
+    assert!(
+        dt < Duration::from_secs(3),
+        "failed only after {dt:?} of work"
+    );
     // A 250-character name is legal, temporary name and all.
     let long = d.join(format!("{}.png", "x".repeat(246)));
     let (o, _) = render(&long, "64x48");
@@ -281,7 +332,10 @@ fn sigterm_during_encoding_leaves_no_temporary_file() {
             .unwrap();
         let t0 = Instant::now();
         while tmp_files().is_empty() {
-            assert!(t0.elapsed() < Duration::from_secs(60), "no temporary file appeared");
+            assert!(
+                t0.elapsed() < Duration::from_secs(60),
+                "no temporary file appeared"
+            );
             std::thread::sleep(Duration::from_millis(1));
         }
         Command::new("kill")
@@ -289,13 +343,23 @@ fn sigterm_during_encoding_leaves_no_temporary_file() {
             .status()
             .unwrap();
         let status = child.wait().unwrap();
-        assert!(!status.success(), "{signal}: the render was not interrupted");
+        assert!(
+            !status.success(),
+            "{signal}: the render was not interrupted"
+        );
         let left = tmp_files();
         if signal == "-TERM" {
             assert!(left.is_empty(), "after SIGTERM: {left:?} left behind");
-            assert!(!d.join("out.png").exists(), "a half image became the output");
+            assert!(
+                !d.join("out.png").exists(),
+                "a half image became the output"
+            );
         } else {
-            assert_eq!(left.len(), 1, "SIGKILL must leave the temporary file: {left:?}");
+            assert_eq!(
+                left.len(),
+                1,
+                "SIGKILL must leave the temporary file: {left:?}"
+            );
             std::fs::remove_file(d.join(&left[0])).unwrap();
         }
     }
