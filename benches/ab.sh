@@ -3,7 +3,7 @@
 # times them interleaved in one run (A B A B ...), scene by scene and tracer by tracer, and
 # flags every row where B's median frame is more than 10 % slower than A's.
 #
-#     bash benches/ab.sh [A_REV] [B_REV|worktree]          # rounds: ROUNDS=5
+#     bash benches/ab.sh [A_REV] [B_REV|worktree]     # ROUNDS=5, SCENES="a.toml b.toml"
 #
 # Scenes: the seed scenes and their shadowed variants; the peers scenes (2, 100k and 1M
 # triangles + 10 spheres, with and without shadows) when bench-out/peers has them
@@ -18,6 +18,7 @@ cd "$(dirname "$0")/.."
 a_rev="${1:-HEAD~1}"
 b_rev="${2:-worktree}"
 rounds="${ROUNDS:-5}"
+top="$PWD"
 out=bench-out/ab
 mkdir -p "$out"
 
@@ -34,9 +35,10 @@ build() { # rev -> path of its release binary
         dir="$out/src-$sha"
         rm -rf "$dir"
         git worktree add -f --detach "$dir" "$sha" >&2
-        # One target folder for both builds: the dependencies are built once.
-        (cd "$dir" && CARGO_TARGET_DIR="$PWD/../../../target/ab" cargo build --release --locked -q >&2)
-        cp target/ab/release/glint "$out/glint-$sha"
+        # The project's own target folder: the dependencies are built once. (The binary it
+        # leaves in target/release is copied at once; B is built after A.)
+        (cd "$dir" && CARGO_TARGET_DIR="$top/target" cargo build --release --locked -q >&2)
+        cp target/release/glint "$out/glint-$sha"
         git worktree remove --force "$dir" >&2
     fi
     echo "$out/glint-$sha"
@@ -44,6 +46,9 @@ build() { # rev -> path of its release binary
 A="$(build "$a_rev")"
 B="$(build "$b_rev")"
 
+if [ -n "${SCENES:-}" ]; then
+    read -r -a scenes <<<"$SCENES"
+else
 scenes=(scenes/sphere.toml scenes/triangle.toml scenes/umbrella.toml scenes/bb8.toml
     scenes/mitsubishi.toml scenes/bb8-shadows.toml scenes/mitsubishi-shadows.toml)
 for t in 2 100000 1000000; do
@@ -54,6 +59,7 @@ done
 for s in scenes/bunny.toml scenes/dragon.toml; do
     [ -f "${s%.toml}.toml" ] && grep -q meshes "$s" && ls scenes/meshes/* >/dev/null 2>&1 && scenes+=("$s")
 done
+fi
 
 frame_ms() { # binary scene backend -> the frame time in ms, or "fail"
     local line
@@ -80,7 +86,7 @@ median() { tr ' ' '\n' | grep -v '^$' | sort -g | awk '{a[NR]=$1} END {print (NR
 } | tee "$out/last.md"
 flagged=0
 for s in "${scenes[@]}"; do
-    for backend in cpu gpu; do
+    for backend in ${BACKENDS:-cpu gpu}; do
         ta="" tb=""
         for _ in $(seq "$rounds"); do
             ta+=" $(frame_ms "$A" "$s" "$backend")"
