@@ -34,6 +34,8 @@ pub struct Bvh {
     pub prim_ids: Vec<u32>,
     /// Depth of the deepest leaf (the root is depth 0).
     pub depth: usize,
+    /// Primitives in the largest leaf.
+    pub largest_leaf: usize,
 }
 
 /// A primitive as the builder sees it: its padded box, its box centre and its id.
@@ -145,6 +147,7 @@ impl Bvh {
             nodes: Vec::with_capacity(2 * refs.len()),
             prim_ids: refs.iter().map(|r| r.id).collect(),
             depth: 0,
+            largest_leaf: 0,
         };
         flatten(&root, 0, &mut bvh);
         bvh
@@ -178,6 +181,9 @@ fn build_node(refs: &mut [PrimRef], offset: usize, depth: usize) -> Node {
     };
     if n == 1 || depth + 1 >= MAX_DEPTH {
         return leaf;
+    }
+    if n > MAX_LEAF && !depth_budget_allows_sah(depth, n) {
+        return median_split(refs, offset, depth, bounds, &centres);
     }
 
     // Bin every centre on all three axes in one pass, then sweep each axis for the
@@ -270,6 +276,60 @@ fn build_node(refs: &mut [PrimRef], offset: usize, depth: usize) -> Node {
     }
 }
 
+/// Whether a node at `depth` with `n` primitives may still split by the SAH: it may while
+/// the depth left exceeds, by a margin of 4, the levels that halving would need to bring `n`
+/// down to leaves of `MAX_LEAF`. Past that, the SAH's splits may peel off a few primitives
+/// a level (nested "Russian doll" meshes do) and leave a leaf of thousands at the depth
+/// cap, so the node is split at the object median instead: every level halves the count,
+/// and no leaf exceeds `MAX_LEAF`. Trees of ordinary meshes never reach the margin.
+fn depth_budget_allows_sah(depth: usize, n: usize) -> bool {
+    let halvings = (n.div_ceil(MAX_LEAF) as f64).log2().ceil() as usize;
+    MAX_DEPTH - 1 - depth > halvings + 4
+}
+
+/// Splits at the object median along the widest axis of the centres (the count halves),
+/// ties broken by primitive id so the tree stays deterministic.
+fn median_split(
+    refs: &mut [PrimRef],
+    offset: usize,
+    depth: usize,
+    bounds: Aabb,
+    centres: &Aabb,
+) -> Node {
+    let n = refs.len();
+    let extent = [0, 1, 2].map(|k| centres.hi[k] - centres.lo[k]);
+    let axis = (0..3)
+        .max_by(|&a, &b| {
+            extent[a]
+                .partial_cmp(&extent[b])
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+        .unwrap_or(0);
+    let mid = n / 2;
+    refs.select_nth_unstable_by(mid, |a, b| {
+        a.centre[axis]
+            .total_cmp(&b.centre[axis])
+            .then(a.id.cmp(&b.id))
+    });
+    let (left, right) = refs.split_at_mut(mid);
+    let (l, r) = if n >= PARALLEL_MIN {
+        rayon::join(
+            || build_node(left, offset, depth + 1),
+            || build_node(right, offset + mid, depth + 1),
+        )
+    } else {
+        (
+            build_node(left, offset, depth + 1),
+            build_node(right, offset + mid, depth + 1),
+        )
+    };
+    Node::Interior {
+        bounds,
+        axis: axis as u32,
+        children: Box::new((l, r)),
+    }
+}
+
 fn flatten(node: &Node, depth: usize, bvh: &mut Bvh) {
     bvh.depth = bvh.depth.max(depth);
     match node {
@@ -277,12 +337,15 @@ fn flatten(node: &Node, depth: usize, bvh: &mut Bvh) {
             bounds,
             first,
             count,
-        } => bvh.nodes.push(BvhNode {
-            lo: bounds.lo,
-            first: *first,
-            hi: bounds.hi,
-            count_axis: count << 2,
-        }),
+        } => {
+            bvh.largest_leaf = bvh.largest_leaf.max(*count as usize);
+            bvh.nodes.push(BvhNode {
+                lo: bounds.lo,
+                first: *first,
+                hi: bounds.hi,
+                count_axis: count << 2,
+            })
+        }
         Node::Interior {
             bounds,
             axis,
@@ -349,6 +412,7 @@ mod tests {
             }
         }
         let bvh = Bvh::build(&[], &tris);
+        eprintln!("DEBUG depth {} largest {}", bvh.depth, bvh.largest_leaf);
         check(&bvh, tris.len());
         assert!(bvh.depth < MAX_DEPTH);
     }
@@ -357,6 +421,7 @@ mod tests {
     fn coincident_primitives_are_halved_not_looped() {
         let tris = vec![tri([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]); 1000];
         let bvh = Bvh::build(&[], &tris);
+        eprintln!("DEBUG depth {} largest {}", bvh.depth, bvh.largest_leaf);
         check(&bvh, tris.len());
         assert!(bvh.depth < MAX_DEPTH);
     }
@@ -369,6 +434,55 @@ mod tests {
         ];
         let bvh = Bvh::build(&[], &tris);
         assert_eq!(bvh.prim_ids.len(), 2);
+    }
+
+    #[test]
+    fn deep_subtrees_still_end_in_small_leaves() {
+        // Wherever the SAH has peeled its way down to (nested "Russian doll" meshes peel a
+        // few primitives a level), the rule switches to median splits while the depth left
+        // still holds the halvings: 10,000 scattered triangles entering at depth 34 (13
+        // levels left, 12 halvings needed) end in leaves of at most MAX_LEAF.
+        let (depth, largest) = subtree_at(34);
+        assert!(depth < MAX_DEPTH, "depth {depth}");
+        assert!(
+            largest <= MAX_LEAF,
+            "a leaf of {largest} primitives at depth {depth}"
+        );
+        // The twin: entering at depth 40, too deep for any rule, the leaf check sees the
+        // leaves of 70 and more that the cap forces.
+        let (_, largest) = subtree_at(40);
+        assert!(largest > 50, "the leaf-size check is blind: {largest}");
+    }
+
+    /// Builds 10,000 scattered triangles as a subtree whose root is at `depth`; returns the
+    /// deepest leaf's depth and the largest leaf.
+    fn subtree_at(depth: usize) -> (usize, usize) {
+        let mut x = 12345u32;
+        let mut rnd = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x as f32 / u32::MAX as f32
+        };
+        let tris: Vec<Triangle> = (0..10_000)
+            .map(|_| {
+                let c = [rnd(), rnd(), rnd()];
+                tri(c, [c[0] + 1e-3, c[1], c[2]], [c[0], c[1] + 1e-3, c[2]])
+            })
+            .collect();
+        let mut refs: Vec<PrimRef> = tris
+            .iter()
+            .enumerate()
+            .map(|(k, t)| triangle_ref(t, k as u32 | TRIANGLE_BIT))
+            .collect();
+        let root = build_node(&mut refs, 0, depth);
+        let mut bvh = Bvh {
+            prim_ids: refs.iter().map(|r| r.id).collect(),
+            ..Bvh::default()
+        };
+        flatten(&root, depth, &mut bvh);
+        check(&bvh, tris.len());
+        (bvh.depth, bvh.largest_leaf)
     }
 
     #[test]
