@@ -220,6 +220,9 @@ fn run(cli: Cli) -> Result<()> {
             let s = load(&scene, confine)?;
             let (w, h) = size.unwrap_or(s.size());
             let algo = triangle.unwrap_or(s.triangle);
+            for w in s.range_warnings(algo) {
+                eprintln!("warning: {w}");
+            }
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
             let t0 = Instant::now();
@@ -334,6 +337,9 @@ fn run(cli: Cli) -> Result<()> {
             let s = load(&scene, confine)?;
             let (w, h) = size.unwrap_or(s.size());
             let algo = triangle.unwrap_or(s.triangle);
+            for w in s.range_warnings(algo) {
+                eprintln!("warning: {w}");
+            }
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
             let gpu = Gpu::new(adapter.as_deref())?;

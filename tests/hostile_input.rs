@@ -364,3 +364,62 @@ fn sigterm_during_encoding_leaves_no_temporary_file() {
         }
     }
 }
+
+/// Primitives beyond the f32-safe range of their test are named in a warning (file, line,
+/// key, the bound); the seed scenes, inside it, get none with any algorithm.
+#[test]
+fn primitives_beyond_the_f32_range_are_warned_about() {
+    use glint::scene::TriangleAlgorithm;
+    let scene = |eye: &str, body: &str| {
+        let src = HEAD.replace("eye = [0.0, 0.0, 5.0]", &format!("eye = {eye}")) + body;
+        Scene::parse(&src, Path::new("range.toml")).unwrap()
+    };
+    let big = scene(
+        "[0.0, 0.0, 5.0]",
+        "[[triangles]]\nvertices = [[-1e13, -1e13, -1e13], [1e13, -1e13, -1e13], [0.0, 1e13, -1e13]]\nmaterial = \"m\"\n",
+    );
+    for algo in TriangleAlgorithm::ALL {
+        let w = big.range_warnings(algo);
+        assert_eq!(w.len(), 1, "{algo}: {w:?}");
+        assert!(
+            w[0].starts_with("range.toml:15: triangles[0].vertices: 1 triangle(s)"),
+            "{w:?}"
+        );
+    }
+    let spheres = [
+        ("[1e20, 0.0, 0.0]", "1.0", "from a ray origin"),
+        ("[0.0, 0.0, 5.0]", "1e-30", "radius 1.0e-30 < 1e-18"),
+        ("[0.0, 0.0, 5.0]", "1e30", "radius 1.0e30 > 1e18"),
+    ];
+    for (eye, r, why) in spheres {
+        let s = scene(
+            eye,
+            &format!("[[spheres]]\ncenter = [0.0, 0.0, 0.0]\nradius = {r}\nmaterial = \"m\"\n"),
+        );
+        let w = s.range_warnings(TriangleAlgorithm::Watertight);
+        assert!(
+            w.len() == 1 && w[0].contains(why) && w[0].starts_with("range.toml:15: spheres[0]"),
+            "{w:?}"
+        );
+    }
+    // The twin: everything the project ships is inside the range.
+    for name in [
+        "sphere",
+        "triangle",
+        "umbrella",
+        "bb8",
+        "mitsubishi",
+        "bb8-shadows",
+        "mitsubishi-shadows",
+    ] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
+        let s = Scene::load(&path).unwrap();
+        for algo in TriangleAlgorithm::ALL {
+            assert!(
+                s.range_warnings(algo).is_empty(),
+                "{name}/{algo}: {:?}",
+                s.range_warnings(algo)
+            );
+        }
+    }
+}

@@ -4,6 +4,7 @@
 mod error;
 mod format;
 mod mesh;
+pub mod range;
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -173,6 +174,11 @@ pub struct Scene {
     /// Things that are allowed but probably not meant (zero-area triangles, ...), each
     /// naming file, line and key.
     pub warnings: Vec<String>,
+    /// Where each sphere was written: `file:line: spheres[i]`.
+    pub sphere_sources: Vec<String>,
+    /// Where the triangles came from, in order: (index of the first, `file:line: key`),
+    /// one entry per `[[triangles]]` and per mesh.
+    pub triangle_sources: Vec<(usize, String)>,
 }
 
 impl Scene {
@@ -499,6 +505,7 @@ impl Validator<'_> {
         let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
 
         let mut spheres = Vec::new();
+        let mut sphere_sources = Vec::new();
         for (i, s) in f.spheres.iter().enumerate() {
             let s = s.get_ref();
             let center = self.finite3(&s.center, &format!("spheres[{i}].center"))?;
@@ -517,9 +524,15 @@ impl Validator<'_> {
                 radius,
                 material,
             });
+            sphere_sources.push(format!(
+                "{}:{}: spheres[{i}]",
+                self.path.display(),
+                line_of(self.src, s.center.span().start)
+            ));
         }
 
         let mut triangles = Vec::new();
+        let mut triangle_sources = Vec::new();
         for (i, t) in f.triangles.iter().enumerate() {
             let t = t.get_ref();
             let key = format!("triangles[{i}].vertices");
@@ -536,6 +549,14 @@ impl Validator<'_> {
             }
             let material =
                 self.material_index(&names, &t.material, &format!("triangles[{i}].material"))?;
+            triangle_sources.push((
+                triangles.len(),
+                format!(
+                    "{}:{}: {key}",
+                    self.path.display(),
+                    line_of(self.src, t.vertices.span().start)
+                ),
+            ));
             triangles.push(Triangle {
                 vertices: v,
                 material,
@@ -543,6 +564,15 @@ impl Validator<'_> {
         }
 
         for (i, m) in f.meshes.iter().enumerate() {
+            triangle_sources.push((
+                triangles.len(),
+                format!(
+                    "{}:{}: meshes[{i}].file ({})",
+                    self.path.display(),
+                    line_of(self.src, m.get_ref().file.span().start),
+                    m.get_ref().file.get_ref()
+                ),
+            ));
             mesh::load(
                 self,
                 i,
@@ -565,6 +595,8 @@ impl Validator<'_> {
             spheres,
             triangles,
             warnings,
+            sphere_sources,
+            triangle_sources,
         })
     }
 
