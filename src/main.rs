@@ -185,6 +185,43 @@ fn load(scene: &Path, confine: bool) -> Result<Scene> {
     Ok(s)
 }
 
+/// Fails, before any work, when a `w`×`h` frame cannot fit in this process's memory: the
+/// f32 frame (16 bytes a pixel) and its 8-bit copy (3 bytes a pixel) must fit in what the
+/// system has available and under the address-space limit (`ulimit -v`), with 512 MiB to
+/// spare for the scene, the driver and the encoder.
+fn check_frame_memory(w: u32, h: u32) -> Result<()> {
+    let need = w as u64 * h as u64 * (16 + 3) + (512 << 20);
+    let read = |path: &str| std::fs::read_to_string(path).unwrap_or_default();
+    let field = |text: &str, key: &str| -> Option<u64> {
+        text.lines()
+            .find(|l| l.starts_with(key))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|v| v.parse().ok())
+    };
+    let available = field(&read("/proc/meminfo"), "MemAvailable:").map(|kb| kb << 10);
+    let limit = read("/proc/self/limits")
+        .lines()
+        .find(|l| l.starts_with("Max address space"))
+        .and_then(|l| l.split_whitespace().nth(3).map(str::to_owned))
+        .and_then(|v| v.parse::<u64>().ok());
+    let used = field(&read("/proc/self/status"), "VmSize:").map_or(0, |kb| kb << 10);
+    let room = [available, limit.map(|l| l.saturating_sub(used))]
+        .into_iter()
+        .flatten()
+        .min();
+    if let Some(room) = room
+        && need > room
+    {
+        bail!(
+            "a {w}x{h} frame needs about {} MiB of memory and this process has {} MiB \
+             (available memory, and the ulimit -v address-space limit): choose a smaller --size",
+            need >> 20,
+            room >> 20
+        );
+    }
+    Ok(())
+}
+
 fn main() {
     // SIGINT / SIGTERM: remove the half-written temporary image (the output file itself is
     // only ever replaced whole), then exit as interrupted.
@@ -223,6 +260,7 @@ fn run(cli: Cli) -> Result<()> {
             for w in s.range_warnings(algo) {
                 eprintln!("warning: {w}");
             }
+            check_frame_memory(w, h)?;
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
             let t0 = Instant::now();

@@ -423,3 +423,29 @@ fn primitives_beyond_the_f32_range_are_warned_about() {
         }
     }
 }
+
+/// A frame too large for the memory the process has (under `ulimit -v`) is refused before
+/// any work with a clear message, not aborted by the allocator; a frame that fits renders.
+#[test]
+fn frames_too_large_for_memory_are_refused_before_work() {
+    let d = dir("memory");
+    std::fs::write(d.join("t.obj"), TRIANGLE_OBJ).unwrap();
+    let scene = mesh_scene(&d, "s", "t.obj");
+    let run = |size: &str| {
+        Command::new("bash")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v 4000000 && exec {GLINT} render {} -o {} --backend cpu --size {size}",
+                scene.display(),
+                d.join("out.png").display()
+            ))
+            .output()
+            .unwrap()
+    };
+    let o = run("32768x32768");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("a 32768x32768 frame needs about"), "{err}");
+    let o = run("1024x768");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
