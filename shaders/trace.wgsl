@@ -48,6 +48,7 @@ const SHADOW_EPSILON: f32 = 1.1920929e-7; // see buffers::SHADOW_EPSILON
 const SPLITTER: f32 = 4097.0; // 2^12 + 1, Veltkamp's split for f32
 const BVH_STACK: u32 = 48u; // bvh::MAX_DEPTH: the builder never makes a deeper tree
 const BOX_SLACK: f32 = 4.76837158e-7; // 4 ε ≥ 2γ(3): pbrt's conservative slab test
+const NAIVE_MIN_SIN2: f32 = 1.9073486e-6; // 16 ε: see buffers::NAIVE_MIN_SIN2
 
 // ---- shared structs (Rust: src/buffers.rs) --------------------------------------------
 
@@ -251,6 +252,9 @@ fn hit_triangle_naive(ray: Ray, tri: Triangle, t_min: f32, t_max: f32) -> vec3<f
     let d20 = dot(e_ap, e_ab);
     let d21 = dot(e_ap, e_ac);
     let denom = d00 * d11 - d01 * d01;
+    if !(denom > d00 * d11 * NAIVE_MIN_SIN2) {
+        return miss; // a sliver: denom is mostly rounding (buffers::NAIVE_MIN_SIN2)
+    }
     let u = (d11 * d20 - d01 * d21) / denom;
     let v = (d00 * d21 - d01 * d20) / denom;
     if u >= 0.0 && v >= 0.0 && u + v <= 1.0 {

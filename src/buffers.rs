@@ -43,6 +43,14 @@ pub const SHADOW_EPSILON: f32 = f32::EPSILON;
 /// up to 4 ε (pbrt's conservative slab test). WGSL: `BOX_SLACK`.
 pub const BOX_SLACK: f32 = 4.0 * f32::EPSILON;
 
+/// The naive test's sliver bound: a triangle whose `d00·d11 − d01²` (|e_ab|²·|e_ac|²·sin²θ)
+/// is at most 16 ε of `d00·d11` is a miss, as a degenerate one is. Below it the
+/// difference is mostly rounding (each of the two products is good to about 7 ε), so the
+/// barycentric coordinates are noise: such slivers (θ below about 0.08°) filled most of a
+/// frame with false hits, and more or fewer of them through the BVH than by testing every
+/// primitive (`tests/slivers.rs`). WGSL: `NAIVE_MIN_SIN2`.
+pub const NAIVE_MIN_SIN2: f32 = 16.0 * f32::EPSILON;
+
 /// Veltkamp's splitter for f32 (2^12 + 1), used by Dekker's exact product. WGSL: `SPLITTER`.
 pub const SPLITTER: f32 = 4097.0;
 

@@ -34,6 +34,8 @@ pub trait Real:
     const EPSILON: Self;
     /// 2γ(3) rounded up (4 ε), the relative slack of the conservative box test (pbrt).
     const BOX_SLACK: Self;
+    /// The naive test's sliver bound, 16 ε (`buffers::NAIVE_MIN_SIN2`).
+    const NAIVE_MIN_SIN2: Self;
     /// WGSL `bitcast<f32>(bitcast<u32>(x) + 1u)`: the next float up, for positive finite x.
     fn bits_plus_one(self) -> Self;
     /// Exact conversion from f32.
@@ -57,6 +59,7 @@ impl Real for f32 {
     const SPLITTER: Self = crate::buffers::SPLITTER;
     const EPSILON: Self = crate::buffers::SHADOW_EPSILON;
     const BOX_SLACK: Self = crate::buffers::BOX_SLACK;
+    const NAIVE_MIN_SIN2: Self = crate::buffers::NAIVE_MIN_SIN2;
     fn bits_plus_one(self) -> Self {
         f32::from_bits(self.to_bits().wrapping_add(1))
     }
@@ -87,6 +90,7 @@ impl Real for f64 {
     const SPLITTER: Self = 134_217_729.0; // 2^27 + 1
     const EPSILON: Self = f64::EPSILON;
     const BOX_SLACK: Self = 4.0 * f64::EPSILON;
+    const NAIVE_MIN_SIN2: Self = 16.0 * f64::EPSILON;
     fn bits_plus_one(self) -> Self {
         f64::from_bits(self.to_bits().wrapping_add(1))
     }

@@ -231,6 +231,9 @@ pub fn hit_triangle_naive<R: Real>(ray: Ray<R>, tri: &Triangle, t_min: R, t_max:
     let d20 = e_ap.dot(e_ab);
     let d21 = e_ap.dot(e_ac);
     let denom = d00 * d11 - d01 * d01;
+    if !(denom > d00 * d11 * R::NAIVE_MIN_SIN2) {
+        return miss; // a sliver: denom is mostly rounding (buffers::NAIVE_MIN_SIN2)
+    }
     let u = (d11 * d20 - d01 * d21) / denom;
     let v = (d00 * d21 - d01 * d20) / denom;
     if u >= R::ZERO && v >= R::ZERO && u + v <= R::ONE {
