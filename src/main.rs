@@ -25,7 +25,10 @@ struct Cli {
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Backend {
-    /// The GPU tracer when a Vulkan adapter exists, else the CPU tracer (said in one line).
+    /// A real GPU when there is one; the CPU tracer when the only adapters are CPU Vulkan
+    /// implementations (lavapipe: slower than the CPU tracer on every scene measured) or
+    /// there is none (said in one line); the CPU tracer too when the scene exceeds the GPU's
+    /// buffers.
     Auto,
     /// The WGSL compute shader through wgpu (Vulkan).
     Gpu,
@@ -185,12 +188,18 @@ fn load(scene: &Path, confine: bool) -> Result<Scene> {
     Ok(s)
 }
 
-/// Fails, before any work, when a `w`×`h` frame cannot fit in this process's memory: the
-/// f32 frame (16 bytes a pixel) and its 8-bit copy (3 bytes a pixel) must fit in what the
-/// system has available and under the address-space limit (`ulimit -v`), with 512 MiB to
-/// spare for the scene, the driver and the encoder.
-fn check_frame_memory(w: u32, h: u32) -> Result<()> {
-    let need = w as u64 * h as u64 * (16 + 3) + (512 << 20);
+/// Rows per band when a frame is rendered and written band by band: about 64 MiB of f32
+/// pixels, an even number (the CPU packets are two rows high), at least 2.
+fn band_rows(w: u32, h: u32) -> u32 {
+    let rows = ((64u64 << 20) / (w as u64 * 16)).max(2) as u32 & !1;
+    rows.min(h.max(1))
+}
+
+/// Fails, before any work, when the `bytes` a `w`×`h` frame needs at once cannot fit in this
+/// process's memory: what the system has available and what the address-space limit
+/// (`ulimit -v`) leaves, with 512 MiB to spare for the scene, the driver and the encoder.
+fn check_memory(w: u32, h: u32, bytes: u64) -> Result<()> {
+    let need = bytes + (512 << 20);
     let read = |path: &str| std::fs::read_to_string(path).unwrap_or_default();
     let field = |text: &str, key: &str| -> Option<u64> {
         text.lines()
@@ -213,13 +222,56 @@ fn check_frame_memory(w: u32, h: u32) -> Result<()> {
         && need > room
     {
         bail!(
-            "a {w}x{h} frame needs about {} MiB of memory and this process has {} MiB \
+            "a {w}x{h} frame needs about {} MiB of memory at once and this process has {} MiB \
              (available memory, and the ulimit -v address-space limit): choose a smaller --size",
             need >> 20,
             room >> 20
         );
     }
     Ok(())
+}
+
+/// The tracer a render runs on.
+enum Tracer {
+    Cpu,
+    CpuF64,
+    Gpu(Box<Gpu>),
+}
+
+/// `--backend` made concrete. `auto`: a real GPU when there is one; when the only Vulkan
+/// adapters are CPU implementations (lavapipe, SwiftShader), the CPU packet tracer, which
+/// was faster than lavapipe on every scene measured (Mesa 22.3 and 25, seed, peers and mesh
+/// scenes: docs/bench), and starts no device; no adapter at all: the CPU tracer. Each
+/// choice that is not the GPU says so in one line.
+fn choose_tracer(backend: Backend, adapter: Option<&str>) -> Result<Tracer> {
+    match backend {
+        Backend::Cpu => Ok(Tracer::Cpu),
+        Backend::CpuF64 => Ok(Tracer::CpuF64),
+        Backend::Gpu => Ok(Tracer::Gpu(Box::new(Gpu::new(adapter)?))),
+        Backend::Auto => {
+            let infos: Vec<wgpu::AdapterInfo> = glint::gpu::adapters()
+                .iter()
+                .map(|a| a.get_info())
+                .collect();
+            if infos.is_empty() {
+                eprintln!(
+                    "note: no Vulkan adapter, so the CPU tracer renders this \
+                     (for the GPU tracer: apt-get install mesa-vulkan-drivers libvulkan1)"
+                );
+                return Ok(Tracer::Cpu);
+            }
+            if adapter.is_none() && infos.iter().all(glint::gpu::is_cpu_adapter) {
+                eprintln!(
+                    "note: the only Vulkan adapter is {}, a CPU implementation: glint's CPU \
+                     tracer is faster than it on every scene measured, so it renders this \
+                     (--backend gpu runs the shader there)",
+                    infos[0].name
+                );
+                return Ok(Tracer::Cpu);
+            }
+            Ok(Tracer::Gpu(Box::new(Gpu::new(adapter)?)))
+        }
+    }
 }
 
 fn main() {
@@ -260,72 +312,88 @@ fn run(cli: Cli) -> Result<()> {
             for w in s.range_warnings(algo) {
                 eprintln!("warning: {w}");
             }
-            check_frame_memory(w, h)?;
+            let band = band_rows(w, h);
+            check_memory(w, h, band as u64 * w as u64 * (16 + 3))?;
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
+            let tracer = choose_tracer(backend, adapter.as_deref())?;
             let t0 = Instant::now();
             let bar = ProgressBar::new(t0);
-            let (image, what) = match backend {
-                Backend::Cpu => (
-                    glint::cpu::render_f32_progress(&buf, spec, &|d, n| bar.show(d, n)),
-                    "cpu (f32)".to_string(),
-                ),
-                Backend::CpuF64 => (
-                    glint::cpu::render_f64(&s, &buf, spec),
-                    "cpu-f64".to_string(),
-                ),
-                Backend::Gpu | Backend::Auto => match Gpu::new(adapter.as_deref()) {
-                    Ok(gpu) => {
-                        match gpu
-                            .kernel
-                            .render(&gpu.device, &gpu.queue, &buf, spec, &mut |d, n| {
-                                bar.show(d, n)
-                            }) {
-                            Ok((img, t)) => {
-                                let what = format!(
-                                    "gpu: {} (device {:.0} ms, compile {:.0} ms, trace {:.1} ms, readback {:.1} ms)",
-                                    gpu.describe(),
-                                    gpu.start_time.as_secs_f64() * 1e3,
-                                    t.compile.as_secs_f64() * 1e3,
-                                    t.trace.as_secs_f64() * 1e3,
-                                    t.readback.as_secs_f64() * 1e3
-                                );
-                                (img, what)
-                            }
-                            // Too large for this device's buffers: the CPU has no such limit.
-                            Err(e @ glint::gpu::GpuError::TooLarge { .. })
-                                if backend == Backend::Auto =>
-                            {
-                                eprintln!("note: {e}; so the CPU tracer renders this");
-                                (
-                                    glint::cpu::render_f32_progress(&buf, spec, &|d, n| {
-                                        bar.show(d, n)
-                                    }),
-                                    "cpu (f32)".to_string(),
-                                )
-                            }
-                            Err(e) => return Err(e.into()),
-                        }
-                    }
-                    Err(e)
-                        if backend == Backend::Auto
-                            && matches!(e, glint::gpu::GpuError::NoAdapter) =>
-                    {
-                        eprintln!(
-                            "note: no Vulkan adapter, so the CPU tracer renders this \
-                             (for the GPU tracer: apt-get install mesa-vulkan-drivers libvulkan1)"
-                        );
-                        (
-                            glint::cpu::render_f32_progress(&buf, spec, &|d, n| bar.show(d, n)),
-                            "cpu (f32)".to_string(),
-                        )
-                    }
-                    Err(e) => return Err(e.into()),
-                },
+            let mut png = glint::image::PngStream::create(&output, w, h)?;
+            let mut frame = std::time::Duration::ZERO;
+            // The frame in bands of `band` rows, each written to the PNG as it comes: memory
+            // stays bounded by a band, whatever the frame size.
+            let cpu_bands = |png: &mut glint::image::PngStream,
+                             frame: &mut std::time::Duration,
+                             f64: bool|
+             -> Result<()> {
+                let mut y = 0;
+                while y < h {
+                    let rows = band.min(h - y);
+                    let t = Instant::now();
+                    let px = if f64 {
+                        glint::cpu::render_f64_rows(&s, &buf, spec, y, rows)
+                    } else {
+                        glint::cpu::render_f32_rows(&buf, spec, y, rows)
+                    };
+                    *frame += t.elapsed();
+                    png.write_rows(&px)?;
+                    y += rows;
+                    bar.show(y, h);
+                }
+                Ok(())
             };
-            let dt = t0.elapsed();
+            let what = match tracer {
+                Tracer::Cpu => {
+                    cpu_bands(&mut png, &mut frame, false)?;
+                    "cpu (f32)".to_string()
+                }
+                Tracer::CpuF64 => {
+                    cpu_bands(&mut png, &mut frame, true)?;
+                    "cpu-f64".to_string()
+                }
+                Tracer::Gpu(gpu) => {
+                    let mut written: Result<(), glint::image::ImageError> = Ok(());
+                    let result = gpu.kernel.render_bands(
+                        &gpu.device,
+                        &gpu.queue,
+                        &buf,
+                        spec,
+                        band,
+                        &mut |y, px| {
+                            if written.is_ok() {
+                                written = png.write_rows(px);
+                            }
+                            bar.show(y + (px.len() / w as usize) as u32, h);
+                        },
+                    );
+                    match result {
+                        Ok(t) => {
+                            written?;
+                            frame = t.trace + t.readback;
+                            format!(
+                                "gpu: {} (device {:.0} ms, compile {:.0} ms, trace {:.1} ms, readback {:.1} ms)",
+                                gpu.describe(),
+                                gpu.start_time.as_secs_f64() * 1e3,
+                                t.compile.as_secs_f64() * 1e3,
+                                t.trace.as_secs_f64() * 1e3,
+                                t.readback.as_secs_f64() * 1e3
+                            )
+                        }
+                        // Too large for this device's buffers: the CPU has no such limit.
+                        Err(e @ glint::gpu::GpuError::TooLarge { .. })
+                            if backend == Backend::Auto =>
+                        {
+                            eprintln!("note: {e}; so the CPU tracer renders this");
+                            cpu_bands(&mut png, &mut frame, false)?;
+                            "cpu (f32)".to_string()
+                        }
+                        Err(e) => return Err(e.into()),
+                    }
+                }
+            };
             bar.finish();
-            image.save_png(&output)?;
+            png.finish()?;
             println!(
                 "{}: {}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",
                 output.display(),
@@ -334,7 +402,7 @@ fn run(cli: Cli) -> Result<()> {
                 buf.triangles.len(),
                 algo,
                 buf.spheres.len(),
-                dt.as_secs_f64() * 1e3,
+                frame.as_secs_f64() * 1e3,
                 what
             );
             Ok(())

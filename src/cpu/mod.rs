@@ -28,23 +28,35 @@ pub type Progress<'a> = dyn Fn(u32, u32) + Sync + 'a;
 
 fn render_with<R: Real>(g: &Globals<R>, progress: &Progress<'_>) -> Image {
     let (w, h) = (g.cam.width, g.cam.height);
-    let mut pixels = vec![[0.0f32; 4]; w as usize * h as usize];
+    Image {
+        width: w,
+        height: h,
+        pixels: rows_with(g, 0, h, progress),
+    }
+}
+
+/// Rows `y0 .. y0 + rows` of [`render_with`]'s image, row-major.
+fn rows_with<R: Real>(
+    g: &Globals<R>,
+    y0: u32,
+    rows: u32,
+    progress: &Progress<'_>,
+) -> Vec<[f32; 4]> {
+    let w = g.cam.width;
+    let mut pixels = vec![[0.0f32; 4]; w as usize * rows as usize];
     let done = AtomicU32::new(0);
     pixels
         .par_chunks_mut(w as usize)
         .enumerate()
-        .for_each(|(j, row)| {
+        .for_each(|(r, row)| {
+            let j = y0 + r as u32;
             for (i, px) in row.iter_mut().enumerate() {
-                let c = trace::trace_pixel(g, i as u32, j as u32);
+                let c = trace::trace_pixel(g, i as u32, j);
                 *px = c.map(|x| x.to_f32());
             }
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, h);
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, rows);
         });
-    Image {
-        width: w,
-        height: h,
-        pixels,
-    }
+    pixels
 }
 
 /// What the f32 tracers see: the camera exactly as the shader receives it.
@@ -60,32 +72,69 @@ fn globals_f32(buf: &SceneBuffers, spec: Specialisation) -> Globals<'_, f32> {
 /// pixels, bands of `PACKET_H` rows in parallel): the same image as [`render_with`].
 fn render_packets(g: &Globals<f32>, simd: packet::Simd, progress: &Progress<'_>) -> Image {
     let (w, h) = (g.cam.width, g.cam.height);
-    let mut pixels = vec![[0.0f32; 4]; w as usize * h as usize];
+    Image {
+        width: w,
+        height: h,
+        pixels: packet_rows(g, simd, 0, h, progress),
+    }
+}
+
+/// Rows `y0 .. y0 + rows` of [`render_packets`]'s image, row-major. Any `y0` gives the same
+/// pixels: each lane of a packet is its own pixel's ray, whatever its neighbours.
+fn packet_rows(
+    g: &Globals<f32>,
+    simd: packet::Simd,
+    y0: u32,
+    rows: u32,
+    progress: &Progress<'_>,
+) -> Vec<[f32; 4]> {
+    let w = g.cam.width;
+    let mut pixels = vec![[0.0f32; 4]; w as usize * rows as usize];
     let done = AtomicU32::new(0);
     let band = packet::PACKET_H as usize * w as usize;
     pixels
         .par_chunks_mut(band)
         .enumerate()
-        .for_each(|(b, rows)| {
-            let j = b as u32 * packet::PACKET_H;
+        .for_each(|(b, out)| {
+            let j = y0 + b as u32 * packet::PACKET_H;
             // The last band may have fewer rows than a packet.
-            let n = rows.len() as u32 / w;
+            let n = out.len() as u32 / w;
             for i in (0..w).step_by(packet::PACKET_W as usize) {
                 let px = packet::trace_packet(g, i, j, simd);
                 for (l, c) in px.iter().enumerate() {
                     let (x, y) = (i + l as u32 % packet::PACKET_W, l as u32 / packet::PACKET_W);
                     if x < w && y < n {
-                        rows[(y * w + x) as usize] = *c;
+                        out[(y * w + x) as usize] = *c;
                     }
                 }
             }
-            progress(done.fetch_add(n, Ordering::Relaxed) + n, h);
+            progress(done.fetch_add(n, Ordering::Relaxed) + n, rows);
         });
-    Image {
-        width: w,
-        height: h,
-        pixels,
-    }
+    pixels
+}
+
+/// Rows `y0 .. y0 + rows` of [`render_f32`]'s image (row-major): a band of a frame too large
+/// to hold whole, for streaming it to a file. `y0 + rows` must not exceed the height.
+pub fn render_f32_rows(
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    y0: u32,
+    rows: u32,
+) -> Vec<[f32; 4]> {
+    let g = globals_f32(buf, spec);
+    packet_rows(&g, packet::Simd::Best, y0, rows, &|_, _| {})
+}
+
+/// Rows `y0 .. y0 + rows` of [`render_f64`]'s image (row-major).
+pub fn render_f64_rows(
+    scene: &Scene,
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    y0: u32,
+    rows: u32,
+) -> Vec<[f32; 4]> {
+    let g = globals_f64(scene, buf, spec);
+    rows_with(&g, y0, rows, &|_, _| {})
 }
 
 /// Renders in f32 as the shader does, specialised as the GPU would be, in packets of eight
@@ -122,6 +171,11 @@ pub fn render_f32_mirror(buf: &SceneBuffers, spec: Specialisation) -> Image {
 /// Renders the f64 ground truth: the same algorithms with the camera basis, every
 /// intersection and the shading in f64 (inputs widened exactly from the f32 scene).
 pub fn render_f64(scene: &Scene, buf: &SceneBuffers, spec: Specialisation) -> Image {
+    render_with(&globals_f64(scene, buf, spec), &|_, _| {})
+}
+
+/// The f64 camera and scene: the basis and `tan` computed in f64 from the file's values.
+fn globals_f64<'a>(scene: &Scene, buf: &'a SceneBuffers, spec: Specialisation) -> Globals<'a, f64> {
     let c = &scene.camera;
     let [forward, right, up] = camera_basis::<f64>(
         V3::from_f32(c.eye),
@@ -139,7 +193,7 @@ pub fn render_f64(scene: &Scene, buf: &SceneBuffers, spec: Specialisation) -> Im
         width: w,
         height: h,
     };
-    render_with(&Globals { cam, buf, spec }, &|_, _| {})
+    Globals { cam, buf, spec }
 }
 
 /// The `query` entry point on the CPU, in f32 (the shader's twin) over many rays.

@@ -300,12 +300,34 @@ impl Kernel {
         progress: &mut dyn FnMut(u32, u32),
     ) -> Result<(Image, GpuTimings), GpuError> {
         let (width, height) = (buf.params.width, buf.params.height);
+        let mut image = Image::new(width, height, [0.0; 4]);
+        let timings = self.render_bands(device, queue, buf, spec, u32::MAX, &mut |y, data| {
+            let start = y as usize * width as usize;
+            image.pixels[start..start + data.len()].copy_from_slice(data);
+            progress(y + (data.len() / width as usize) as u32, height);
+        })?;
+        Ok((image, timings))
+    }
+
+    /// [`Kernel::render`] without the whole frame: tiles of at most `max_rows` rows (and the
+    /// device's limit), each handed to `band(first_row, pixels)` as it is read back, top to
+    /// bottom, so a frame larger than memory can be streamed to a file.
+    pub fn render_bands(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &SceneBuffers,
+        spec: Specialisation,
+        max_rows: u32,
+        band: &mut dyn FnMut(u32, &[[f32; 4]]),
+    ) -> Result<GpuTimings, GpuError> {
+        let (width, height) = (buf.params.width, buf.params.height);
         let mut timings = GpuTimings::default();
         let (pipeline, compile) = self.pipeline(device, spec, Entry::Render)?;
         timings.compile = compile;
 
         let t0 = Instant::now();
-        let rows = tile_rows(device, width, height);
+        let rows = tile_rows(device, width, height).min(max_rows.max(1));
         let tile_bytes = rows as u64 * width as u64 * 16;
         check_size(device, "one tile of the image", tile_bytes)?;
         let (scene, output, staging) = scoped(device, "upload", || -> Result<_, GpuError> {
@@ -343,7 +365,6 @@ impl Kernel {
         });
         timings.upload = t0.elapsed();
 
-        let mut image = Image::new(width, height, [0.0; 4]);
         let mut y = 0;
         while y < height {
             let h = rows.min(height - y);
@@ -375,13 +396,11 @@ impl Kernel {
 
             let t2 = Instant::now();
             let data: Vec<[f32; 4]> = read_back(device, &staging, bytes)?;
-            let start = y as usize * width as usize;
-            image.pixels[start..start + data.len()].copy_from_slice(&data);
             timings.readback += t2.elapsed();
+            band(y, &data);
             y += h;
-            progress(y, height);
         }
-        Ok((image, timings))
+        Ok(timings)
     }
 
     /// Runs the `query` entry point: the nearest hit of each ray, as `closest_hit` gives it.
