@@ -8,8 +8,8 @@
 // - only `+ - * /`, `sqrt`, `dot`, `normalize` and comparisons on floats; `fma` never;
 //   `pow` only for a non-integer Phong exponent (the one documented difference);
 // - never a sum of two products by one shared factor (`a * r + b * r`): lavapipe's NIR
-//   rewrites it as `(a + b) * r` (an inexact algebraic rule), Rust does not; divide
-//   instead (see `hit_triangle_moller_trumbore`);
+//   rewrites it as `(a + b) * r` (an inexact algebraic rule), Rust does not; write the
+//   factored form on both sides (see `hit_triangle_moller_trumbore`);
 // - `max`/`min`/`clamp` on floats are written as `select`s, so NaN has one meaning on both
 //   sides (`select(0.0, x, x > 0.0)` is 0 for NaN, where `max` would be unspecified);
 // - everything Rust computes once per frame (camera basis, `tan`) arrives in `Params`.
@@ -265,11 +265,11 @@ fn hit_triangle_naive(ray: Ray, tri: Triangle, t_min: f32, t_max: f32) -> vec3<f
 
 /// Möller–Trumbore, two-sided. Returns (t, u, v) with t = INFINITY on a miss.
 ///
-/// u, v and t are each divided by `det`, not multiplied by a shared `1 / det`: lavapipe's
-/// compiler factors `u + v = a·r + b·r` into `(a + b)·r` (NIR's inexact distributive rule),
-/// which rounded `u + v` differently from Rust on rays through a shared vertex or edge
-/// (13 to 20 hit/miss disagreements on `tests/vertex_rays.rs`'s grid). Quotients are not
-/// factored, and a correctly rounded quotient is also the more accurate u, v and t.
+/// The test `u + v <= 1` is written `(su + sv) * inv_det <= 1`: that is what lavapipe's
+/// compiler turns `su * inv_det + sv * inv_det` into (NIR's inexact distributive rule),
+/// while Rust rounds the two products apart, so the plain sum disagreed on rays through a
+/// shared vertex or edge (13 to 20 hit/miss pixels on `tests/vertex_rays.rs`'s grid).
+/// Written factored on both sides, no rule applies and both round alike.
 fn hit_triangle_moller_trumbore(ray: Ray, tri: Triangle, t_min: f32, t_max: f32) -> vec3<f32> {
     let miss = vec3<f32>(INFINITY, 0.0, 0.0);
     let e1 = tri.b - tri.a;
@@ -279,17 +279,20 @@ fn hit_triangle_moller_trumbore(ray: Ray, tri: Triangle, t_min: f32, t_max: f32)
     if det == 0.0 || det != det {
         return miss; // parallel, degenerate, or NaN
     }
+    let inv_det = 1.0 / det;
     let s = ray.origin - tri.a;
-    let u = dot(s, p) / det;
+    let su = dot(s, p);
+    let u = su * inv_det;
     if !(u >= 0.0 && u <= 1.0) {
         return miss;
     }
     let q = cross3(s, e1);
-    let v = dot(ray.dir, q) / det;
-    if !(v >= 0.0 && u + v <= 1.0) {
+    let sv = dot(ray.dir, q);
+    let v = sv * inv_det;
+    if !(v >= 0.0 && (su + sv) * inv_det <= 1.0) {
         return miss;
     }
-    let t = dot(e2, q) / det;
+    let t = dot(e2, q) * inv_det;
     if !in_interval(t, t_min, t_max) {
         return miss;
     }

@@ -259,18 +259,21 @@ pub fn hit_triangle_moller_trumbore<R: Real>(
     if det == R::ZERO || det != det {
         return miss; // parallel, degenerate, or NaN
     }
-    // Three quotients, not products by a shared 1/det: see the WGSL doc comment.
+    let inv_det = R::ONE / det;
     let s = ray.origin - ta;
-    let u = s.dot(p) / det;
+    let su = s.dot(p);
+    let u = su * inv_det;
     if !(u >= R::ZERO && u <= R::ONE) {
         return miss;
     }
     let q = s.cross(e1);
-    let v = ray.dir.dot(q) / det;
-    if !(v >= R::ZERO && u + v <= R::ONE) {
+    let sv = ray.dir.dot(q);
+    let v = sv * inv_det;
+    // u + v in the factored form lavapipe compiles it to (see the WGSL doc comment).
+    if !(v >= R::ZERO && (su + sv) * inv_det <= R::ONE) {
         return miss;
     }
-    let t = e2.dot(q) / det;
+    let t = e2.dot(q) * inv_det;
     if !in_interval(t, t_min, t_max) {
         return miss;
     }
