@@ -346,8 +346,9 @@ impl SceneBuffers {
         algo: TriangleAlgorithm,
         shadows: bool,
     ) -> Self {
-        let bvh = Bvh::build(&spheres, &triangles);
-        let leaf_triangles = bvh
+        let bvh = crate::stages::time("BVH build", || Bvh::build(&spheres, &triangles));
+        let t_flat = std::time::Instant::now();
+        let leaf_triangles: Vec<Triangle> = bvh
             .prim_ids
             .iter()
             .map(|&id| {
@@ -358,6 +359,7 @@ impl SceneBuffers {
                 }
             })
             .collect();
+        crate::stages::record("flatten", t_flat.elapsed());
         SceneBuffers {
             params: Params {
                 n_spheres: spheres.len() as u32,

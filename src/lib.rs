@@ -21,3 +21,4 @@ pub mod gpu;
 pub mod image;
 pub mod oracle;
 pub mod scene;
+pub mod stages;

@@ -47,6 +47,9 @@ enum Command {
         /// Output PNG.
         #[arg(short, long)]
         output: PathBuf,
+        /// Print the time of each stage (read, gunzip, parse, BVH build, trace, PNG, ...).
+        #[arg(short, long)]
+        verbose: bool,
         /// Which tracer.
         #[arg(long, value_enum, default_value = "auto")]
         backend: Backend,
@@ -292,6 +295,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Render {
             scene,
             output,
+            verbose,
             backend,
             size,
             triangle,
@@ -304,6 +308,7 @@ fn run(cli: Cli) -> Result<()> {
                     output.display()
                 );
             }
+            let start = Instant::now();
             // Before any work: the folder exists and a file can be made there.
             glint::image::check_writable(&output)?;
             let s = load(&scene, confine)?;
@@ -337,7 +342,7 @@ fn run(cli: Cli) -> Result<()> {
                         glint::cpu::render_f32_rows(&buf, spec, y, rows)
                     };
                     *frame += t.elapsed();
-                    png.write_rows(&px)?;
+                    glint::stages::time("PNG encode", || png.write_rows(&px))?;
                     y += rows;
                     bar.show(y, h);
                 }
@@ -362,7 +367,7 @@ fn run(cli: Cli) -> Result<()> {
                         band,
                         &mut |y, px| {
                             if written.is_ok() {
-                                written = png.write_rows(px);
+                                written = glint::stages::time("PNG encode", || png.write_rows(px));
                             }
                             bar.show(y + (px.len() / w as usize) as u32, h);
                         },
@@ -393,7 +398,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             };
             bar.finish();
-            png.finish()?;
+            glint::stages::time("PNG finish", || png.finish())?;
             println!(
                 "{}: {}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",
                 output.display(),
@@ -405,6 +410,20 @@ fn run(cli: Cli) -> Result<()> {
                 frame.as_secs_f64() * 1e3,
                 what
             );
+            if verbose {
+                glint::stages::record("trace", frame);
+                let stages = glint::stages::take();
+                let total: f64 = stages.iter().map(|(_, d)| d.as_secs_f64()).sum();
+                for (name, d) in &stages {
+                    eprintln!("  {name:<12} {:>8.1} ms", d.as_secs_f64() * 1e3);
+                }
+                eprintln!(
+                    "  {:<12} {:>8.1} ms (stages), {:.1} ms since start",
+                    "total",
+                    total * 1e3,
+                    start.elapsed().as_secs_f64() * 1e3
+                );
+            }
             Ok(())
         }
         Command::Bench {

@@ -84,6 +84,7 @@ pub(super) fn load(
         message,
     };
     let mut bytes = read_mesh_bytes(v, &obj_path).map_err(&fail)?;
+    let t_check = std::time::Instant::now();
     // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
     // first line as an unknown keyword.
     if bytes.starts_with(b"\xEF\xBB\xBF") {
@@ -99,7 +100,47 @@ pub(super) fn load(
             )));
         }
     };
-    for w in scan_obj(text).map_err(&fail)? {
+    let xf = mesh_transform(v, i, m)?;
+    // glint's own parallel reader when the scene names the material and the OBJ holds only
+    // positions and faces (tobj otherwise).
+    if let Some(name) = &m.material {
+        let t = std::time::Instant::now();
+        let parsed = super::obj::parse(text).map_err(&fail)?;
+        crate::stages::record("OBJ parse", t.elapsed());
+        if let Some(parsed) = parsed {
+            let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
+            let material = v.material_index(&names, name, &format!("meshes[{i}].material"))?;
+            if let Some(first) = parsed.short_faces.first() {
+                warnings.push(format!(
+                    "{}:{line}: {key}: {}: {}",
+                    v.path.display(),
+                    obj_path.display(),
+                    short_face_warning(parsed.short_faces.len(), *first)
+                ));
+            }
+            let t = std::time::Instant::now();
+            let placed: Vec<Triangle> = {
+                use rayon::prelude::*;
+                parsed
+                    .triangles
+                    .par_iter()
+                    .enumerate()
+                    .map(|(f, tri)| {
+                        place(&xf, *tri)
+                            .map(|vertices| Triangle { vertices, material })
+                            .map_err(|e| fail(format!("face {f}: {e}")))
+                    })
+                    .collect::<Result<_, _>>()?
+            };
+            crate::stages::record("transform", t.elapsed());
+            let before = triangles.len();
+            triangles.extend(placed);
+            return finish(v, line, &key, &triangles[before..], &fail, warnings);
+        }
+    }
+    let scanned = scan_obj(text).map_err(&fail)?;
+    crate::stages::record("OBJ check", t_check.elapsed());
+    for w in scanned {
         warnings.push(format!(
             "{}:{line}: {key}: {}: {w}",
             v.path.display(),
@@ -114,6 +155,7 @@ pub(super) fn load(
     };
     let obj_dir = obj_path.parent().unwrap_or(Path::new(".")).to_owned();
     let mtl_problem = std::cell::RefCell::new(None::<String>);
+    let t_parse = std::time::Instant::now();
     let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(&bytes[..]), &opts, |p| {
         let mtl = (v.read)(&obj_dir.join(p)).map_err(|e| {
             *mtl_problem.borrow_mut() = Some(format!("MTL {}: {e}", obj_dir.join(p).display()));
@@ -195,25 +237,9 @@ pub(super) fn load(
         });
     }
 
-    let xf = Transform::new(
-        m.scale.as_ref().map(|s| *s.get_ref()).unwrap_or([1.0; 3]),
-        m.rotate.as_ref().map(|s| *s.get_ref()).unwrap_or([0.0; 3]),
-        m.translate
-            .as_ref()
-            .map(|s| *s.get_ref())
-            .unwrap_or([0.0; 3]),
-    );
-    for (name, s) in [
-        ("scale", &m.scale),
-        ("rotate", &m.rotate),
-        ("translate", &m.translate),
-    ] {
-        if let Some(s) = s {
-            v.finite3(s, &format!("meshes[{i}].{name}"))?;
-        }
-    }
+    crate::stages::record("OBJ parse", t_parse.elapsed());
+    let t_xf = std::time::Instant::now();
     let before = triangles.len();
-    let mut degenerate = 0usize;
     for model in &models {
         let mesh = &model.mesh;
         let material = match (named, mesh.material_id) {
@@ -228,8 +254,8 @@ pub(super) fn load(
         };
         let n_vertices = mesh.positions.len() / 3;
         for (f, tri) in mesh.indices.chunks_exact(3).enumerate() {
-            let mut vs = [[0.0f32; 3]; 3];
-            for (slot, &ix) in vs.iter_mut().zip(tri) {
+            let mut ps = [[0.0f32; 3]; 3];
+            for (slot, &ix) in ps.iter_mut().zip(tri) {
                 let ix = ix as usize;
                 if ix >= n_vertices {
                     return Err(fail(format!(
@@ -238,38 +264,67 @@ pub(super) fn load(
                         ix + 1
                     )));
                 }
-                let p = [
+                *slot = [
                     mesh.positions[3 * ix],
                     mesh.positions[3 * ix + 1],
                     mesh.positions[3 * ix + 2],
                 ];
-                if p.iter().any(|x| !x.is_finite()) {
-                    return Err(fail(format!(
-                        "object {:?}: vertex {} is not finite",
-                        model.name,
-                        ix + 1
-                    )));
-                }
-                *slot = xf.apply(p);
             }
-            if vs.iter().flatten().any(|x| !x.is_finite()) {
-                return Err(fail(format!(
-                    "object {:?}, face {f}: the transform overflows f32",
-                    model.name
-                )));
-            }
-            if is_degenerate(&vs) {
-                degenerate += 1;
-            }
-            triangles.push(Triangle {
-                vertices: vs,
-                material,
-            });
+            let vertices = place(&xf, ps)
+                .map_err(|e| fail(format!("object {:?}, face {f}: {e}", model.name)))?;
+            triangles.push(Triangle { vertices, material });
         }
     }
-    if triangles.len() == before {
+    crate::stages::record("transform", t_xf.elapsed());
+    finish(v, line, &key, &triangles[before..], &fail, warnings)
+}
+
+/// The mesh entry's transform, its values checked.
+fn mesh_transform(v: &Validator<'_>, i: usize, m: &MeshFile) -> Result<Transform, SceneError> {
+    for (name, s) in [
+        ("scale", &m.scale),
+        ("rotate", &m.rotate),
+        ("translate", &m.translate),
+    ] {
+        if let Some(s) = s {
+            v.finite3(s, &format!("meshes[{i}].{name}"))?;
+        }
+    }
+    Ok(Transform::new(
+        m.scale.as_ref().map(|s| *s.get_ref()).unwrap_or([1.0; 3]),
+        m.rotate.as_ref().map(|s| *s.get_ref()).unwrap_or([0.0; 3]),
+        m.translate
+            .as_ref()
+            .map(|s| *s.get_ref())
+            .unwrap_or([0.0; 3]),
+    ))
+}
+
+/// One triangle's file positions, checked finite, transformed, checked again.
+fn place(xf: &Transform, ps: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], String> {
+    if ps.iter().flatten().any(|x| !x.is_finite()) {
+        return Err("a vertex is not finite".into());
+    }
+    let vs = ps.map(|p| xf.apply(p));
+    if vs.iter().flatten().any(|x| !x.is_finite()) {
+        return Err("the transform overflows f32".into());
+    }
+    Ok(vs)
+}
+
+/// The checks after a mesh's triangles are in: none is an error; zero-area ones a warning.
+fn finish(
+    v: &Validator<'_>,
+    line: usize,
+    key: &str,
+    added: &[Triangle],
+    fail: &dyn Fn(String) -> SceneError,
+    warnings: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    if added.is_empty() {
         return Err(fail("no triangles: the mesh is empty".into()));
     }
+    let degenerate = added.iter().filter(|t| is_degenerate(&t.vertices)).count();
     if degenerate > 0 {
         warnings.push(format!(
             "{}:{line}: {key}: {degenerate} zero-area triangles (never hit)",
@@ -277,6 +332,14 @@ pub(super) fn load(
         ));
     }
     Ok(())
+}
+
+/// The warning for `n` faces of fewer than three vertices, the first on line `first`.
+fn short_face_warning(n: usize, first: usize) -> String {
+    format!(
+        "{n} face(s) with fewer than three vertices dropped (line {first}{})",
+        if n > 1 { " and others" } else { "" }
+    )
 }
 
 /// Checks the OBJ lines tobj would reject without saying where, or drop in silence:
@@ -335,15 +398,7 @@ pub fn scan_obj(text: &str) -> Result<Vec<String>, String> {
         }
     }
     if let Some(first) = short_faces.first() {
-        warnings.push(format!(
-            "{} face(s) with fewer than three vertices dropped (line {first}{})",
-            short_faces.len(),
-            if short_faces.len() > 1 {
-                " and others"
-            } else {
-                ""
-            }
-        ));
+        warnings.push(short_face_warning(short_faces.len(), *first));
     }
     Ok(warnings)
 }
@@ -369,7 +424,8 @@ fn short_colour_line(mtl: &[u8]) -> Option<usize> {
 
 /// The bytes of an OBJ file, gunzipped when the name ends in `.gz`.
 fn read_mesh_bytes(v: &Validator<'_>, path: &Path) -> Result<Vec<u8>, String> {
-    let raw = (v.read)(path)?;
+    let raw = crate::stages::time("read", || (v.read)(path))?;
+    let _gunzip = Gunzip(std::time::Instant::now());
     if path.extension().is_some_and(|e| e == "gz") {
         use std::io::Read;
         let limit = super::max_input_bytes();
@@ -387,4 +443,13 @@ fn read_mesh_bytes(v: &Validator<'_>, path: &Path) -> Result<Vec<u8>, String> {
         return Ok(out);
     }
     Ok(raw)
+}
+
+/// Records the gunzip stage when dropped (at every return of `read_mesh_bytes`).
+struct Gunzip(std::time::Instant);
+
+impl Drop for Gunzip {
+    fn drop(&mut self) {
+        crate::stages::record("gunzip", self.0.elapsed());
+    }
 }

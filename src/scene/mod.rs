@@ -4,6 +4,7 @@
 mod error;
 mod format;
 mod mesh;
+mod obj;
 pub mod range;
 
 use std::path::{Path, PathBuf};
