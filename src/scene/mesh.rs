@@ -119,14 +119,20 @@ pub(super) fn load(
                 ));
             }
             let t = std::time::Instant::now();
+            // Each position transformed once, then the triangles gathered from them: the same
+            // numbers as transforming each triangle's corners (`Transform::apply` is a pure
+            // function of the position).
             let placed: Vec<Triangle> = {
                 use rayon::prelude::*;
+                let moved: Vec<[f32; 3]> =
+                    parsed.vertices.par_iter().map(|&p| xf.apply(p)).collect();
                 parsed
                     .triangles
                     .par_iter()
                     .enumerate()
-                    .map(|(f, tri)| {
-                        place(&xf, *tri)
+                    .map(|(f, ix)| {
+                        let ps = ix.map(|k| parsed.vertices[k as usize]);
+                        check_placed(ps, ix.map(|k| moved[k as usize]))
                             .map(|vertices| Triangle { vertices, material })
                             .map_err(|e| fail(format!("face {f}: {e}")))
                     })
@@ -302,10 +308,14 @@ fn mesh_transform(v: &Validator<'_>, i: usize, m: &MeshFile) -> Result<Transform
 
 /// One triangle's file positions, checked finite, transformed, checked again.
 fn place(xf: &Transform, ps: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], String> {
+    check_placed(ps, ps.map(|p| xf.apply(p)))
+}
+
+/// `vs`, the transformed `ps`, when both are finite.
+fn check_placed(ps: [[f32; 3]; 3], vs: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], String> {
     if ps.iter().flatten().any(|x| !x.is_finite()) {
         return Err("a vertex is not finite".into());
     }
-    let vs = ps.map(|p| xf.apply(p));
     if vs.iter().flatten().any(|x| !x.is_finite()) {
         return Err("the transform overflows f32".into());
     }

@@ -7,12 +7,14 @@
 
 use rayon::prelude::*;
 
-/// What [`parse`] found: the triangles (untransformed) and the lines of faces with fewer
-/// than three vertices (dropped, as tobj drops them).
+/// What [`parse`] found: the positions and triangles (untransformed) and the lines of faces
+/// with fewer than three vertices (dropped, as tobj drops them).
 #[derive(Debug)]
 pub struct Parsed {
-    /// Triangles in file order.
-    pub triangles: Vec<[[f32; 3]; 3]>,
+    /// The positions, in file order.
+    pub vertices: Vec<[f32; 3]>,
+    /// Triangles in file order, as indices into `vertices`.
+    pub triangles: Vec<[u32; 3]>,
     /// 1-based lines of faces with fewer than three vertices.
     pub short_faces: Vec<usize>,
 }
@@ -72,7 +74,7 @@ pub fn parse(text: &str) -> Result<Option<Parsed>, String> {
         .collect();
     let resolve = |(ix, before, line): &([i64; 3], u32, u32), (l0, v0): (u32, usize)| {
         let defined = v0 as i64 + *before as i64;
-        let mut out = [[0.0f32; 3]; 3];
+        let mut out = [0u32; 3];
         for (slot, &i) in out.iter_mut().zip(ix) {
             let k = if i > 0 { i - 1 } else { defined + i };
             if i == 0 || k < 0 || k >= defined {
@@ -81,7 +83,7 @@ pub fn parse(text: &str) -> Result<Option<Parsed>, String> {
                     l0 + line
                 ));
             }
-            *slot = vertices[k as usize];
+            *slot = k as u32;
         }
         Ok(out)
     };
@@ -100,6 +102,7 @@ pub fn parse(text: &str) -> Result<Option<Parsed>, String> {
         .flat_map(|(c, (l0, _))| c.short_faces.iter().map(move |l| (l0 + l) as usize))
         .collect();
     Ok(Some(Parsed {
+        vertices,
         triangles,
         short_faces,
     }))
