@@ -200,10 +200,12 @@ mod tests {
     }
 
     fn same_as_tobj(text: &str) {
-        let ours = parse(text)
-            .unwrap()
-            .expect("the fast path takes it")
-            .triangles;
+        let p = parse(text).unwrap().expect("the fast path takes it");
+        let ours: Vec<[[f32; 3]; 3]> = p
+            .triangles
+            .iter()
+            .map(|t| t.map(|i| p.vertices[i as usize]))
+            .collect();
         assert_eq!(ours, tobj_triangles(text));
     }
 
