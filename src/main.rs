@@ -26,7 +26,7 @@ struct Cli {
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Backend {
     /// A real GPU when there is one; the CPU tracer when the only adapters are CPU Vulkan
-    /// implementations (lavapipe: slower than the CPU tracer on every scene measured) or
+    /// implementations (lavapipe: slower than the CPU tracer for every whole render measured) or
     /// there is none (said in one line); the CPU tracer too when the scene exceeds the GPU's
     /// buffers.
     Auto,
@@ -242,9 +242,12 @@ enum Tracer {
 }
 
 /// `--backend` made concrete. `auto`: a real GPU when there is one; when the only Vulkan
-/// adapters are CPU implementations (lavapipe, SwiftShader), the CPU packet tracer, which
-/// was faster than lavapipe on every scene measured (Mesa 22.3 and 25, seed, peers and mesh
-/// scenes: docs/bench), and starts no device; no adapter at all: the CPU tracer. Each
+/// adapters are CPU implementations (lavapipe, SwiftShader), the CPU packet tracer, and no
+/// device is started. Measured here (docs/bench/drivers.md, 1024×768): the CPU tracer beat
+/// lavapipe 22.3 on every seed scene, frame for frame, and lavapipe 25 on every whole render
+/// once its device start and shader compile (about 100 ms) are counted; lavapipe 25's frame
+/// alone is faster on naive-triangle scenes (mitsubishi 57 against 98 ms), so very large
+/// frames of those are better with `--backend gpu`. No adapter at all: the CPU tracer. Each
 /// choice that is not the GPU says so in one line.
 fn choose_tracer(backend: Backend, adapter: Option<&str>) -> Result<Tracer> {
     match backend {
@@ -266,8 +269,8 @@ fn choose_tracer(backend: Backend, adapter: Option<&str>) -> Result<Tracer> {
             if adapter.is_none() && infos.iter().all(glint::gpu::is_cpu_adapter) {
                 eprintln!(
                     "note: the only Vulkan adapter is {}, a CPU implementation: glint's CPU \
-                     tracer is faster than it on every scene measured, so it renders this \
-                     (--backend gpu runs the shader there)",
+                     tracer renders this, faster than it for a whole render (device start and \
+                     shader compile included; --backend gpu runs the shader there)",
                     infos[0].name
                 );
                 return Ok(Tracer::Cpu);
