@@ -19,8 +19,16 @@ pub struct Image {
 #[derive(Debug, thiserror::Error)]
 pub enum ImageError {
     /// The extension is not one glint writes.
-    #[error("{0}: unknown image extension: use .png")]
+    #[error("{0}: unknown image extension: use .png or .exr")]
     Extension(std::path::PathBuf),
+    /// A file could not be decoded, or is not what glint reads.
+    #[error("{path}: {message}")]
+    Decode {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// The file system refused.
     #[error("{path}: {error}")]
     Io {
@@ -107,7 +115,9 @@ pub struct PngStream {
 impl PngStream {
     /// Starts `path` (a `.png`) for a `width`×`height` RGB image.
     pub fn create(path: &Path, width: u32, height: u32) -> Result<PngStream, ImageError> {
-        check_extension(path)?;
+        if format_of(path)? != Format::Png {
+            return Err(ImageError::Extension(path.to_owned()));
+        }
         let target = write_target(path);
         let tmp = temp_path(&target, "tmp");
         let io = |error| ImageError::Io {
@@ -195,11 +205,103 @@ impl Drop for PngStream {
     }
 }
 
-/// Fails unless `path` ends in `.png` (checked before rendering starts).
-pub fn check_extension(path: &Path) -> Result<(), ImageError> {
+/// The file formats glint writes and reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// 8-bit RGB PNG (what is looked at).
+    Png,
+    /// OpenEXR, 32-bit float RGBA with the hit distance t in A (−1 for a miss): the f32
+    /// image exactly, for checking a render made elsewhere bit for bit.
+    Exr,
+}
+
+/// The format `path`'s extension names, or an error (checked before rendering starts).
+pub fn format_of(path: &Path) -> Result<Format, ImageError> {
     match path.extension().and_then(|e| e.to_str()) {
-        Some(e) if e.eq_ignore_ascii_case("png") => Ok(()),
+        Some(e) if e.eq_ignore_ascii_case("png") => Ok(Format::Png),
+        Some(e) if e.eq_ignore_ascii_case("exr") => Ok(Format::Exr),
         _ => Err(ImageError::Extension(path.to_owned())),
+    }
+}
+
+/// Fails unless `path` ends in `.png` or `.exr` (checked before rendering starts).
+pub fn check_extension(path: &Path) -> Result<(), ImageError> {
+    format_of(path).map(|_| ())
+}
+
+impl Image {
+    /// Writes the f32 image to an OpenEXR file exactly (RGBA 32-bit float, A = t), through
+    /// a temporary file renamed over `path`.
+    pub fn save_exr(&self, path: &Path) -> Result<(), ImageError> {
+        let flat: Vec<f32> = self.pixels.iter().flatten().copied().collect();
+        write_atomically(path, |tmp| {
+            image::save_buffer_with_format(
+                tmp,
+                bytemuck::cast_slice(&flat),
+                self.width,
+                self.height,
+                image::ExtendedColorType::Rgba32F,
+                image::ImageFormat::OpenExr,
+            )
+            .map_err(|error| ImageError::Encode {
+                path: path.to_owned(),
+                error,
+            })
+        })
+    }
+
+    /// Writes PNG or EXR as the extension says.
+    pub fn save(&self, path: &Path) -> Result<(), ImageError> {
+        match format_of(path)? {
+            Format::Png => self.save_png(path),
+            Format::Exr => self.save_exr(path),
+        }
+    }
+
+    /// Reads an image glint wrote: an EXR exactly (t from A), a PNG as 8-bit colours
+    /// divided by 255 with t = 0 for every pixel (a PNG has no hit distances).
+    pub fn load(path: &Path) -> Result<Image, ImageError> {
+        let format = format_of(path)?;
+        let bytes =
+            crate::scene::read_limited(path, crate::scene::max_input_bytes()).map_err(|e| {
+                ImageError::Decode {
+                    path: path.to_owned(),
+                    message: e.to_string(),
+                }
+            })?;
+        let decode = |message: String| ImageError::Decode {
+            path: path.to_owned(),
+            message,
+        };
+        let img = image::load_from_memory_with_format(
+            &bytes,
+            match format {
+                Format::Png => image::ImageFormat::Png,
+                Format::Exr => image::ImageFormat::OpenExr,
+            },
+        )
+        .map_err(|e| decode(e.to_string()))?;
+        let (width, height) = (img.width(), img.height());
+        let pixels = match format {
+            Format::Exr => img.into_rgba32f().pixels().map(|p| p.0).collect(),
+            Format::Png => img
+                .into_rgb8()
+                .pixels()
+                .map(|p| {
+                    [
+                        p.0[0] as f32 / 255.0,
+                        p.0[1] as f32 / 255.0,
+                        p.0[2] as f32 / 255.0,
+                        0.0,
+                    ]
+                })
+                .collect(),
+        };
+        Ok(Image {
+            width,
+            height,
+            pixels,
+        })
     }
 }
 

@@ -44,7 +44,7 @@ enum Command {
     Render {
         /// The scene file (TOML).
         scene: PathBuf,
-        /// Output PNG.
+        /// Output image: .png (8-bit) or .exr (the f32 image exactly, t in alpha).
         #[arg(short, long)]
         output: PathBuf,
         /// Print the time of each stage (read, gunzip, parse, BVH build, trace, PNG, ...).
@@ -88,6 +88,17 @@ enum Command {
     },
     /// List the Vulkan adapters, best first, with their drivers and versions.
     Adapters,
+    /// Compare two images (PNG or EXR) with `compare`'s metrics and write a difference
+    /// image: an EXR made on a GPU machine against one made on the CPU elsewhere, bit for bit.
+    Diff {
+        /// The first image.
+        a: PathBuf,
+        /// The second image.
+        b: PathBuf,
+        /// Where to write the difference image (PNG).
+        #[arg(long, default_value = "diff.png")]
+        diff: PathBuf,
+    },
     /// Speed against error: every scene × tracer × triangle algorithm, with a warm-up and
     /// timed runs; writes report.md, report.json and plot.png to --out.
     Bench {
@@ -234,6 +245,44 @@ fn check_memory(w: u32, h: u32, bytes: u64) -> Result<()> {
     Ok(())
 }
 
+/// Where a render's bands go: straight into a PNG, or into the whole f32 image for an EXR.
+enum Sink {
+    Png(glint::image::PngStream),
+    Exr(glint::image::Image, usize),
+}
+
+impl Sink {
+    fn create(
+        path: &Path,
+        format: glint::image::Format,
+        w: u32,
+        h: u32,
+    ) -> Result<Sink, glint::image::ImageError> {
+        Ok(match format {
+            glint::image::Format::Png => Sink::Png(glint::image::PngStream::create(path, w, h)?),
+            glint::image::Format::Exr => Sink::Exr(glint::image::Image::new(w, h, [0.0; 4]), 0),
+        })
+    }
+
+    fn write_rows(&mut self, px: &[[f32; 4]]) -> Result<(), glint::image::ImageError> {
+        match self {
+            Sink::Png(p) => p.write_rows(px),
+            Sink::Exr(img, at) => {
+                img.pixels[*at..*at + px.len()].copy_from_slice(px);
+                *at += px.len();
+                Ok(())
+            }
+        }
+    }
+
+    fn finish(self, path: &Path) -> Result<(), glint::image::ImageError> {
+        match self {
+            Sink::Png(p) => p.finish(),
+            Sink::Exr(img, _) => img.save_exr(path),
+        }
+    }
+}
+
 /// The tracer a render runs on.
 enum Tracer {
     Cpu,
@@ -320,37 +369,44 @@ fn run(cli: Cli) -> Result<()> {
             for w in s.range_warnings(algo) {
                 eprintln!("warning: {w}");
             }
+            let format = glint::image::format_of(&output)?;
             let band = band_rows(w, h);
-            check_memory(w, h, band as u64 * w as u64 * (16 + 3))?;
+            check_memory(
+                w,
+                h,
+                match format {
+                    glint::image::Format::Png => band as u64 * w as u64 * (16 + 3),
+                    // An EXR is written whole: the frame and its encoder's copy.
+                    glint::image::Format::Exr => w as u64 * h as u64 * 16 * 2,
+                },
+            )?;
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
             let tracer = choose_tracer(backend, adapter.as_deref())?;
             let t0 = Instant::now();
             let bar = ProgressBar::new(t0);
-            let mut png = glint::image::PngStream::create(&output, w, h)?;
+            let mut png = Sink::create(&output, format, w, h)?;
             let mut frame = std::time::Duration::ZERO;
             // The frame in bands of `band` rows, each written to the PNG as it comes: memory
             // stays bounded by a band, whatever the frame size.
-            let cpu_bands = |png: &mut glint::image::PngStream,
-                             frame: &mut std::time::Duration,
-                             f64: bool|
-             -> Result<()> {
-                let mut y = 0;
-                while y < h {
-                    let rows = band.min(h - y);
-                    let t = Instant::now();
-                    let px = if f64 {
-                        glint::cpu::render_f64_rows(&s, &buf, spec, y, rows)
-                    } else {
-                        glint::cpu::render_f32_rows(&buf, spec, y, rows)
-                    };
-                    *frame += t.elapsed();
-                    glint::stages::time("PNG encode", || png.write_rows(&px))?;
-                    y += rows;
-                    bar.show(y, h);
-                }
-                Ok(())
-            };
+            let cpu_bands =
+                |png: &mut Sink, frame: &mut std::time::Duration, f64: bool| -> Result<()> {
+                    let mut y = 0;
+                    while y < h {
+                        let rows = band.min(h - y);
+                        let t = Instant::now();
+                        let px = if f64 {
+                            glint::cpu::render_f64_rows(&s, &buf, spec, y, rows)
+                        } else {
+                            glint::cpu::render_f32_rows(&buf, spec, y, rows)
+                        };
+                        *frame += t.elapsed();
+                        glint::stages::time("PNG encode", || png.write_rows(&px))?;
+                        y += rows;
+                        bar.show(y, h);
+                    }
+                    Ok(())
+                };
             let what = match tracer {
                 Tracer::Cpu => {
                     cpu_bands(&mut png, &mut frame, false)?;
@@ -401,7 +457,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             };
             bar.finish();
-            glint::stages::time("PNG finish", || png.finish())?;
+            glint::stages::time("PNG finish", || png.finish(&output))?;
             println!(
                 "{}: {}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",
                 output.display(),
@@ -439,6 +495,54 @@ fn run(cli: Cli) -> Result<()> {
             triangle,
             confine,
         } => bench(scenes, size, triangle, runs, out, adapter, no_gpu, confine),
+        Command::Diff { a, b, diff } => {
+            glint::image::check_extension(&diff)?;
+            let (x, y) = (
+                glint::image::Image::load(&a)?,
+                glint::image::Image::load(&b)?,
+            );
+            if (x.width, x.height) != (y.width, y.height) {
+                bail!(
+                    "the images differ in size: {} is {}x{}, {} is {}x{}",
+                    a.display(),
+                    x.width,
+                    x.height,
+                    b.display(),
+                    y.width,
+                    y.height
+                );
+            }
+            let d = glint::compare::diff(&x, &y);
+            let exr = |p: &Path| glint::image::format_of(p).ok() == Some(glint::image::Format::Exr);
+            println!(
+                "{} against {}, {}x{}",
+                a.display(),
+                b.display(),
+                x.width,
+                x.height
+            );
+            println!(
+                "{} differing pixels (8-bit), {} differing in some f32 bit, largest channel difference {:.3e} ({} in 8 bits), RMS {:.3e}",
+                d.differing_pixels, d.differing_bits, d.max_abs, d.max_u8, d.rms
+            );
+            if exr(&a) && exr(&b) {
+                println!(
+                    "{} hit/miss disagreements, {} hits at a distance t that differs in some bit",
+                    d.hit_miss, d.differing_t
+                );
+                println!(
+                    "equal in every bit (colour, hit/miss, t): {}",
+                    if d.bit_exact() { "yes" } else { "NO" }
+                );
+            } else {
+                println!(
+                    "(a PNG holds 8-bit colour only: hit/miss and t are compared between two EXRs)"
+                );
+            }
+            glint::compare::diff_image(&x, &y).save(&diff)?;
+            println!("difference image: {}", diff.display());
+            Ok(())
+        }
         Command::Adapters => {
             let list = glint::gpu::adapters();
             if list.is_empty() {
@@ -501,7 +605,7 @@ fn run(cli: Cli) -> Result<()> {
                 e.differing_pixels, e.hit_miss, e.max_abs, e.rms
             );
             glint::compare::diff_image(&g, &c)
-                .save_png(&diff)
+                .save(&diff)
                 .with_context(|| "writing the difference image")?;
             println!("difference image: {}", diff.display());
             Ok(())
