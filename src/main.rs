@@ -247,7 +247,7 @@ fn check_memory(w: u32, h: u32, bytes: u64) -> Result<()> {
 
 /// Where a render's bands go: straight into a PNG, or into the whole f32 image for an EXR.
 enum Sink {
-    Png(glint::image::PngStream),
+    Png(Box<glint::image::PngStream>),
     Exr(glint::image::Image, usize),
 }
 
@@ -259,7 +259,9 @@ impl Sink {
         h: u32,
     ) -> Result<Sink, glint::image::ImageError> {
         Ok(match format {
-            glint::image::Format::Png => Sink::Png(glint::image::PngStream::create(path, w, h)?),
+            glint::image::Format::Png => {
+                Sink::Png(Box::new(glint::image::PngStream::create(path, w, h)?))
+            }
             glint::image::Format::Exr => Sink::Exr(glint::image::Image::new(w, h, [0.0; 4]), 0),
         })
     }
