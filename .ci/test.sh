@@ -34,6 +34,7 @@ export GLINT_ADAPTER="${GLINT_ADAPTER:-llvmpipe}"
 cargo fmt --check
 cargo clippy --all-targets --locked -- -D warnings
 cargo build --locked --examples
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked --quiet
 
 summary=()
 adapter_line() {

@@ -4,21 +4,31 @@
 //! the ground truth for error.
 //!
 //! ```no_run
-//! let scene = glint::scene::Scene::load("scenes/sphere.toml")?;
-//! let buf = glint::buffers::SceneBuffers::new(&scene, 640, 480, scene.triangle);
-//! let image = glint::cpu::render_f32(&buf, glint::buffers::Specialisation::for_scene(&buf));
-//! image.save_png("sphere.png".as_ref())?;
+//! use glint::{Backend, RenderOptions, Renderer, scene::Scene};
+//! let scene = Scene::load("scenes/sphere.toml")?;
+//! let image = Renderer::new(Backend::Auto)?.render(&scene, &RenderOptions::default())?;
+//! image.save("sphere.png".as_ref())?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! [`Renderer::with_device`] renders on a wgpu device of the caller's own; `examples/` has
+//! both. The lower floors ([`buffers`], [`cpu`], [`gpu`]) stay public for the tests and for
+//! cross-checking users.
+#![deny(missing_docs)]
 
 pub mod bench;
 pub mod buffers;
 pub mod bvh;
 pub mod compare;
 pub mod cpu;
+#[doc(hidden)]
 pub mod fuzzing;
 pub mod gpu;
 pub mod image;
+#[doc(hidden)]
 pub mod oracle;
+mod renderer;
 pub mod scene;
 pub mod stages;
+
+pub use renderer::{Backend, RenderError, RenderOptions, Renderer, Tracer};

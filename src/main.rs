@@ -23,6 +23,17 @@ struct Cli {
     command: Command,
 }
 
+impl From<Backend> for glint::Backend {
+    fn from(b: Backend) -> glint::Backend {
+        match b {
+            Backend::Auto => glint::Backend::Auto,
+            Backend::Gpu => glint::Backend::Gpu,
+            Backend::Cpu => glint::Backend::Cpu,
+            Backend::CpuF64 => glint::Backend::CpuF64,
+        }
+    }
+}
+
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Backend {
     /// A real GPU when there is one; the CPU tracer when the only adapters are CPU Vulkan
@@ -285,52 +296,6 @@ impl Sink {
     }
 }
 
-/// The tracer a render runs on.
-enum Tracer {
-    Cpu,
-    CpuF64,
-    Gpu(Box<Gpu>),
-}
-
-/// `--backend` made concrete. `auto`: a real GPU when there is one; when the only Vulkan
-/// adapters are CPU implementations (lavapipe, SwiftShader), the CPU packet tracer, and no
-/// device is started. Measured here (docs/bench/drivers.md, 1024×768): the CPU tracer beat
-/// lavapipe 22.3 on every seed scene, frame for frame, and lavapipe 25 on every whole render
-/// once its device start and shader compile (about 100 ms) are counted; lavapipe 25's frame
-/// alone is faster on naive-triangle scenes (mitsubishi 57 against 98 ms), so very large
-/// frames of those are better with `--backend gpu`. No adapter at all: the CPU tracer. Each
-/// choice that is not the GPU says so in one line.
-fn choose_tracer(backend: Backend, adapter: Option<&str>) -> Result<Tracer> {
-    match backend {
-        Backend::Cpu => Ok(Tracer::Cpu),
-        Backend::CpuF64 => Ok(Tracer::CpuF64),
-        Backend::Gpu => Ok(Tracer::Gpu(Box::new(Gpu::new(adapter)?))),
-        Backend::Auto => {
-            let infos: Vec<wgpu::AdapterInfo> = glint::gpu::adapters()
-                .iter()
-                .map(|a| a.get_info())
-                .collect();
-            if infos.is_empty() {
-                eprintln!(
-                    "note: no Vulkan adapter, so the CPU tracer renders this \
-                     (for the GPU tracer: apt-get install mesa-vulkan-drivers libvulkan1)"
-                );
-                return Ok(Tracer::Cpu);
-            }
-            if adapter.is_none() && infos.iter().all(glint::gpu::is_cpu_adapter) {
-                eprintln!(
-                    "note: the only Vulkan adapter is {}, a CPU implementation: glint's CPU \
-                     tracer renders this, faster than it for a whole render (device start and \
-                     shader compile included; --backend gpu runs the shader there)",
-                    infos[0].name
-                );
-                return Ok(Tracer::Cpu);
-            }
-            Ok(Tracer::Gpu(Box::new(Gpu::new(adapter)?)))
-        }
-    }
-}
-
 fn main() {
     // SIGINT / SIGTERM: remove the half-written temporary image (the output file itself is
     // only ever replaced whole), then exit as interrupted.
@@ -384,7 +349,10 @@ fn run(cli: Cli) -> Result<()> {
             )?;
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
-            let tracer = choose_tracer(backend, adapter.as_deref())?;
+            let renderer = glint::Renderer::with_adapter(backend.into(), adapter.as_deref())?;
+            if let Some(note) = renderer.note() {
+                eprintln!("note: {note}");
+            }
             let t0 = Instant::now();
             let bar = ProgressBar::new(t0);
             let mut png = Sink::create(&output, format, w, h)?;
@@ -409,16 +377,16 @@ fn run(cli: Cli) -> Result<()> {
                     }
                     Ok(())
                 };
-            let what = match tracer {
-                Tracer::Cpu => {
+            let what = match renderer.tracer() {
+                glint::Tracer::Cpu => {
                     cpu_bands(&mut png, &mut frame, false)?;
                     "cpu (f32)".to_string()
                 }
-                Tracer::CpuF64 => {
+                glint::Tracer::CpuF64 => {
                     cpu_bands(&mut png, &mut frame, true)?;
                     "cpu-f64".to_string()
                 }
-                Tracer::Gpu(gpu) => {
+                glint::Tracer::Gpu(gpu) => {
                     let mut written: Result<(), glint::image::ImageError> = Ok(());
                     let result = gpu.kernel.render_bands(
                         &gpu.device,

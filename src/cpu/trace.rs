@@ -289,11 +289,11 @@ pub struct Shear<R> {
     pub ky: u32,
     /// The axis where |dir| is largest.
     pub kz: u32,
-    /// dir[kx] / dir[kz].
+    /// `dir[kx] / dir[kz]`.
     pub sx: R,
-    /// dir[ky] / dir[kz].
+    /// `dir[ky] / dir[kz]`.
     pub sy: R,
-    /// 1 / dir[kz].
+    /// `1 / dir[kz]`.
     pub sz: R,
 }
 

@@ -186,6 +186,23 @@ impl Gpu {
         })
     }
 
+    /// Wraps a device the caller made (its own adapter, limits and features) and compiles
+    /// the kernel on it. `info` is the adapter's, for reports.
+    pub fn from_device(
+        info: wgpu::AdapterInfo,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Gpu, GpuError> {
+        let kernel = Kernel::new(&device)?;
+        Ok(Gpu {
+            info,
+            device,
+            queue,
+            kernel,
+            start_time: Duration::ZERO,
+        })
+    }
+
     /// A one-line description: name, type, driver.
     pub fn describe(&self) -> String {
         format!(

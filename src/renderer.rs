@@ -1,0 +1,162 @@
+//! The library's front door: one [`Renderer`] for every backend, the `auto` policy, and a
+//! constructor that takes the caller's own wgpu device.
+//!
+//! ```no_run
+//! use glint::{Backend, RenderOptions, Renderer, scene::Scene};
+//! let scene = Scene::load("scenes/bb8.toml")?;
+//! let image = Renderer::new(Backend::Auto)?.render(&scene, &RenderOptions::default())?;
+//! image.save("bb8.png".as_ref())?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use crate::buffers::{SceneBuffers, Specialisation};
+use crate::gpu::{Gpu, GpuError, is_cpu_adapter};
+use crate::image::Image;
+use crate::scene::{Scene, TriangleAlgorithm};
+
+/// Which tracer renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// A real GPU when there is one. When the only Vulkan adapters are CPU implementations
+    /// (lavapipe, SwiftShader) the CPU tracer, which beat lavapipe on every whole render
+    /// measured (`docs/bench/drivers.md`: device start and compile included), and no device
+    /// is started; with no adapter at all, the CPU tracer too. [`Renderer::note`] says why.
+    Auto,
+    /// The WGSL compute shader on a Vulkan adapter (an error when there is none).
+    Gpu,
+    /// The f32 CPU tracer: the shader's mirror, in packets (bit for bit lavapipe's image).
+    Cpu,
+    /// The f64 CPU tracer: the ground truth for error.
+    CpuF64,
+}
+
+/// Options of one render; `None` takes the scene's own value.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderOptions {
+    /// Image size in pixels (default: the scene camera's).
+    pub size: Option<(u32, u32)>,
+    /// Triangle algorithm (default: the scene's).
+    pub triangle: Option<TriangleAlgorithm>,
+}
+
+/// Why a render failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The GPU path failed (no adapter, a buffer too large, a device error).
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+/// The tracer a [`Renderer`] runs: what [`Backend`] resolved to.
+pub enum Tracer {
+    /// The f32 CPU tracer.
+    Cpu,
+    /// The f64 CPU tracer.
+    CpuF64,
+    /// The shader on this device.
+    Gpu(Box<Gpu>),
+}
+
+/// Renders scenes on one backend; holds the device (if any) across renders.
+pub struct Renderer {
+    tracer: Tracer,
+    note: Option<String>,
+}
+
+impl Renderer {
+    /// A renderer on `backend`, on the best adapter.
+    pub fn new(backend: Backend) -> Result<Renderer, RenderError> {
+        Renderer::with_adapter(backend, None)
+    }
+
+    /// A renderer on `backend`; for the GPU, the first adapter whose name contains
+    /// `adapter` (case-insensitive). Naming an adapter makes `Auto` use it, CPU or not.
+    pub fn with_adapter(backend: Backend, adapter: Option<&str>) -> Result<Renderer, RenderError> {
+        let gpu = |a| -> Result<Tracer, RenderError> { Ok(Tracer::Gpu(Box::new(Gpu::new(a)?))) };
+        let (tracer, note) = match backend {
+            Backend::Cpu => (Tracer::Cpu, None),
+            Backend::CpuF64 => (Tracer::CpuF64, None),
+            Backend::Gpu => (gpu(adapter)?, None),
+            Backend::Auto => {
+                let infos: Vec<wgpu::AdapterInfo> = crate::gpu::adapters()
+                    .iter()
+                    .map(|a| a.get_info())
+                    .collect();
+                if infos.is_empty() {
+                    (
+                        Tracer::Cpu,
+                        Some(
+                            "no Vulkan adapter, so the CPU tracer renders this (for the GPU \
+                             tracer: apt-get install mesa-vulkan-drivers libvulkan1)"
+                                .to_string(),
+                        ),
+                    )
+                } else if adapter.is_none() && infos.iter().all(is_cpu_adapter) {
+                    (
+                        Tracer::Cpu,
+                        Some(format!(
+                            "the only Vulkan adapter is {}, a CPU implementation: glint's CPU \
+                             tracer renders this, faster than it for a whole render (device \
+                             start and shader compile included; --backend gpu runs the shader \
+                             there)",
+                            infos[0].name
+                        )),
+                    )
+                } else {
+                    (gpu(adapter)?, None)
+                }
+            }
+        };
+        Ok(Renderer { tracer, note })
+    }
+
+    /// A GPU renderer on the caller's own device and queue (made with whatever adapter,
+    /// features and limits the caller chose); `info` names the adapter in reports.
+    pub fn with_device(
+        info: wgpu::AdapterInfo,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Renderer, RenderError> {
+        Ok(Renderer {
+            tracer: Tracer::Gpu(Box::new(Gpu::from_device(info, device, queue)?)),
+            note: None,
+        })
+    }
+
+    /// What `Auto` chose and why, when it did not choose the GPU.
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// The tracer this renderer runs.
+    pub fn tracer(&self) -> &Tracer {
+        &self.tracer
+    }
+
+    /// One line: the tracer, and for the GPU the adapter and driver.
+    pub fn describe(&self) -> String {
+        match &self.tracer {
+            Tracer::Cpu => "cpu (f32)".into(),
+            Tracer::CpuF64 => "cpu-f64".into(),
+            Tracer::Gpu(g) => format!("gpu: {}", g.describe()),
+        }
+    }
+
+    /// Renders `scene` with `options`: the whole frame in memory, colours linear, t per
+    /// pixel (see [`Image`]). For frames larger than memory, the command line streams bands.
+    pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Image, RenderError> {
+        let (w, h) = options.size.unwrap_or(scene.size());
+        let algo = options.triangle.unwrap_or(scene.triangle);
+        let buf = SceneBuffers::new(scene, w, h, algo);
+        let spec = Specialisation::for_scene(&buf);
+        Ok(match &self.tracer {
+            Tracer::Cpu => crate::cpu::render_f32(&buf, spec),
+            Tracer::CpuF64 => crate::cpu::render_f64(scene, &buf, spec),
+            Tracer::Gpu(g) => {
+                g.kernel
+                    .render(&g.device, &g.queue, &buf, spec, &mut |_, _| {})?
+                    .0
+            }
+        })
+    }
+}
