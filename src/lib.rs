@@ -25,6 +25,7 @@ pub mod cpu;
 pub mod fuzzing;
 pub mod gpu;
 pub mod image;
+pub mod kernel;
 #[doc(hidden)]
 pub mod oracle;
 mod renderer;

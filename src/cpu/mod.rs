@@ -2,7 +2,8 @@
 //! one generic `trace.rs`, rows in parallel with rayon.
 
 pub mod packet;
-pub mod real;
+/// The numeric kernel ([`crate::kernel::real`]), where the mirror's arithmetic lives.
+pub use crate::kernel::real;
 pub mod trace;
 
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -15,13 +16,7 @@ use crate::scene::Scene;
 use real::{Real, V3};
 use trace::{Camera, Globals};
 
-/// SPEC.md's camera basis, evaluated left to right: `[forward, right, up']`.
-pub fn camera_basis<R: Real>(eye: V3<R>, look_at: V3<R>, up: V3<R>) -> [V3<R>; 3] {
-    let forward = (look_at - eye).normalize();
-    let right = forward.cross(up).normalize();
-    let up2 = right.cross(forward);
-    [forward, right, up2]
-}
+pub use crate::kernel::real::camera_basis;
 
 /// Called with (rows done, rows in all) as rows finish, from any thread.
 pub type Progress<'a> = dyn Fn(u32, u32) + Sync + 'a;

@@ -36,12 +36,12 @@ impl TriangleAlgorithm {
         TriangleAlgorithm::Watertight,
     ];
 
-    /// The `TRIANGLE_ALGO` code of `buffers`.
+    /// The `TRIANGLE_ALGO` code of `kernel::layout`.
     pub fn code(self) -> u32 {
         match self {
-            TriangleAlgorithm::Naive => crate::buffers::TRIANGLE_NAIVE,
-            TriangleAlgorithm::MollerTrumbore => crate::buffers::TRIANGLE_MOLLER_TRUMBORE,
-            TriangleAlgorithm::Watertight => crate::buffers::TRIANGLE_WATERTIGHT,
+            TriangleAlgorithm::Naive => crate::kernel::layout::TRIANGLE_NAIVE,
+            TriangleAlgorithm::MollerTrumbore => crate::kernel::layout::TRIANGLE_MOLLER_TRUMBORE,
+            TriangleAlgorithm::Watertight => crate::kernel::layout::TRIANGLE_WATERTIGHT,
         }
     }
 

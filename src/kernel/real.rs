@@ -1,4 +1,5 @@
-//! The arithmetic the CPU tracer is written in: a scalar [`Real`] (f32 to mirror the
+//! The numeric kernel, at the bottom of the house (imports only `kernel::layout`'s
+//! constants): the arithmetic the CPU tracer is written in: a scalar [`Real`] (f32 to mirror the
 //! shader, f64 for the ground truth) and a three-vector [`V3`] whose every operation is
 //! written out in WGSL's order.
 //!
@@ -55,11 +56,11 @@ pub trait Real:
 impl Real for f32 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
-    const INFINITY: Self = crate::buffers::INFINITY;
-    const SPLITTER: Self = crate::buffers::SPLITTER;
-    const EPSILON: Self = crate::buffers::SHADOW_EPSILON;
-    const BOX_SLACK: Self = crate::buffers::BOX_SLACK;
-    const NAIVE_MIN_SIN2: Self = crate::buffers::NAIVE_MIN_SIN2;
+    const INFINITY: Self = crate::kernel::layout::INFINITY;
+    const SPLITTER: Self = crate::kernel::layout::SPLITTER;
+    const EPSILON: Self = crate::kernel::layout::SHADOW_EPSILON;
+    const BOX_SLACK: Self = crate::kernel::layout::BOX_SLACK;
+    const NAIVE_MIN_SIN2: Self = crate::kernel::layout::NAIVE_MIN_SIN2;
     fn bits_plus_one(self) -> Self {
         f32::from_bits(self.to_bits().wrapping_add(1))
     }
@@ -226,4 +227,12 @@ impl<R: Real> Neg for V3<R> {
     fn neg(self) -> Self {
         V3::new(-self.x, -self.y, -self.z)
     }
+}
+
+/// SPEC.md's camera basis, evaluated left to right: `[forward, right, up']`.
+pub fn camera_basis<R: Real>(eye: V3<R>, look_at: V3<R>, up: V3<R>) -> [V3<R>; 3] {
+    let forward = (look_at - eye).normalize();
+    let right = forward.cross(up).normalize();
+    let up2 = right.cross(forward);
+    [forward, right, up2]
 }

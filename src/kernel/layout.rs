@@ -1,0 +1,212 @@
+//! The contract at the bottom: the flat `#[repr(C)]` structs that `shaders/trace.wgsl`
+//! declares and both tracers read, and the codes and constants the shader names. Imports
+//! nothing from glint.
+//!
+//! Every struct here names the WGSL struct it must match; `tests/layout.rs` parses the
+//! shader with naga and checks each size and field offset against `size_of`/`offset_of!`.
+//! WGSL's `vec3<f32>` is 16-byte aligned, so each `[f32; 3]` is followed by a 4-byte field
+//! or an explicit `_pad`.
+
+use bytemuck::{Pod, Zeroable};
+
+/// Material model `ambient`: only Ia·ka.
+pub const MODEL_AMBIENT: u32 = 0;
+/// Material model `diffuse`: ambient + diffuse.
+pub const MODEL_DIFFUSE: u32 = 1;
+/// Material model `phong`: ambient + diffuse + specular.
+pub const MODEL_PHONG: u32 = 2;
+
+/// `TRIANGLE_ALGO` for the seed's plane + barycentric test.
+pub const TRIANGLE_NAIVE: u32 = 0;
+/// `TRIANGLE_ALGO` for Möller–Trumbore.
+pub const TRIANGLE_MOLLER_TRUMBORE: u32 = 1;
+/// `TRIANGLE_ALGO` for the watertight test of Woop, Benthin and Wald.
+pub const TRIANGLE_WATERTIGHT: u32 = 2;
+
+/// `Hit::prim` of a miss.
+pub const PRIM_NONE: u32 = 0xffff_ffff;
+/// Set in `Hit::prim` when the index is a triangle's (else it is a sphere's).
+pub const TRIANGLE_BIT: u32 = 0x8000_0000;
+
+/// The `t` of "no hit yet": `f32::MAX`, so that every finite hit beats it and no
+/// arithmetic on it makes an infinity. WGSL: `INFINITY`.
+pub const INFINITY: f32 = f32::MAX;
+
+/// The relative size of a shadow ray's offset along the normal, in units of the hit
+/// point's largest coordinate (at least 1): 64 ε of f32, about 7.6e-6. WGSL: `SHADOW_EPSILON * 64`.
+pub const SHADOW_EPSILON: f32 = f32::EPSILON;
+
+/// The relative slack of the BVH's box test: 2γ(3) = 6u/(1 − 3u) with u = 2^-24, rounded
+/// up to 4 ε (pbrt's conservative slab test). WGSL: `BOX_SLACK`.
+pub const BOX_SLACK: f32 = 4.0 * f32::EPSILON;
+
+/// The naive test's sliver bound: a triangle whose `d00·d11 − d01²` (|e_ab|²·|e_ac|²·sin²θ)
+/// is at most 16 ε of `d00·d11` is a miss, as a degenerate one is. Below it the
+/// difference is mostly rounding (each of the two products is good to about 7 ε), so the
+/// barycentric coordinates are noise: such slivers (θ below about 0.08°) filled most of a
+/// frame with false hits, and more or fewer of them through the BVH than by testing every
+/// primitive (`tests/slivers.rs`). WGSL: `NAIVE_MIN_SIN2`.
+pub const NAIVE_MIN_SIN2: f32 = 16.0 * f32::EPSILON;
+
+/// Veltkamp's splitter for f32 (2^12 + 1), used by Dekker's exact product. WGSL: `SPLITTER`.
+pub const SPLITTER: f32 = 4097.0;
+
+/// Per-frame constants. Must match WGSL `struct Params` (128 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Params {
+    /// Camera position. Offset 0.
+    pub eye: [f32; 3],
+    /// Image width in pixels. Offset 12.
+    pub width: u32,
+    /// Unit view direction. Offset 16.
+    pub forward: [f32; 3],
+    /// Image height in pixels. Offset 28.
+    pub height: u32,
+    /// Unit right vector. Offset 32.
+    pub right: [f32; 3],
+    /// tan(fov / 2), computed in Rust. Offset 44.
+    pub tan_half: f32,
+    /// Camera up, `cross(right, forward)`. Offset 48.
+    pub up: [f32; 3],
+    /// width / height. Offset 60.
+    pub aspect: f32,
+    /// Ia. Offset 64.
+    pub ambient: [f32; 3],
+    /// Number of spheres in use. Offset 76.
+    pub n_spheres: u32,
+    /// Colour of rays that hit nothing. Offset 80.
+    pub background: [f32; 3],
+    /// Number of triangles in use. Offset 92.
+    pub n_triangles: u32,
+    /// Number of lights. Offset 96.
+    pub n_lights: u32,
+    /// Left column of the tile being rendered. Offset 100.
+    pub tile_x: u32,
+    /// Top row of the tile being rendered. Offset 104.
+    pub tile_y: u32,
+    /// Tile width in pixels. Offset 108.
+    pub tile_width: u32,
+    /// Tile height in pixels. Offset 112.
+    pub tile_height: u32,
+    /// Number of BVH nodes (0 for an empty scene). Offset 116.
+    pub n_nodes: u32,
+    /// Offset 120.
+    pub _pad0: u32,
+    /// Offset 124.
+    pub _pad1: u32,
+}
+
+/// A sphere. Must match WGSL `struct Sphere` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Sphere {
+    /// Centre. Offset 0.
+    pub center: [f32; 3],
+    /// Radius, > 0. Offset 12.
+    pub radius: f32,
+    /// Index into the material buffer. Offset 16.
+    pub material: u32,
+    /// Offset 20.
+    pub _pad0: u32,
+    /// Offset 24.
+    pub _pad1: u32,
+    /// Offset 28.
+    pub _pad2: u32,
+}
+
+/// A triangle. Must match WGSL `struct Triangle` (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Triangle {
+    /// First vertex. Offset 0.
+    pub a: [f32; 3],
+    /// Index into the material buffer. Offset 12.
+    pub material: u32,
+    /// Second vertex. Offset 16.
+    pub b: [f32; 3],
+    /// Offset 28.
+    pub _pad0: u32,
+    /// Third vertex. Offset 32.
+    pub c: [f32; 3],
+    /// Offset 44.
+    pub _pad1: u32,
+}
+
+/// A node of the flattened BVH (see [`crate::bvh`]). Must match WGSL `struct BvhNode`
+/// (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    /// Lower corner of the box. Offset 0.
+    pub lo: [f32; 3],
+    /// Interior: index of the second child (the first is the next node). Leaf: index of
+    /// the first primitive id in `prim_ids`. Offset 12.
+    pub first: u32,
+    /// Upper corner of the box. Offset 16.
+    pub hi: [f32; 3],
+    /// `count << 2 | axis`: a leaf has count > 0 (and axis 0); an interior node has
+    /// count 0 and its split axis, which orders the visit. Offset 28.
+    pub count_axis: u32,
+}
+
+/// A material. Must match WGSL `struct Material` (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Material {
+    /// Ambient reflectance. Offset 0.
+    pub ka: [f32; 3],
+    /// `MODEL_AMBIENT`, `MODEL_DIFFUSE` or `MODEL_PHONG`. Offset 12.
+    pub model: u32,
+    /// Diffuse reflectance. Offset 16.
+    pub kd: [f32; 3],
+    /// Phong exponent. Offset 28.
+    pub n: f32,
+    /// Specular reflectance. Offset 32.
+    pub ks: [f32; 3],
+    /// `n` as an integer when it is one (0..=2^24), else −1: then the power is taken by
+    /// squaring, identically on both tracers. Offset 44.
+    pub n_int: i32,
+}
+
+/// A point light. Must match WGSL `struct Light` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    /// Position. Offset 0.
+    pub position: [f32; 3],
+    /// Offset 12.
+    pub _pad0: u32,
+    /// Colour, Ip. Offset 16.
+    pub color: [f32; 3],
+    /// Offset 28.
+    pub _pad1: u32,
+}
+
+/// A ray for the `query` entry point. Must match WGSL `struct RayIn` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RayIn {
+    /// Origin. Offset 0.
+    pub origin: [f32; 3],
+    /// Hits at t ≤ t_min are ignored. Offset 12.
+    pub t_min: f32,
+    /// Direction (any length). Offset 16.
+    pub dir: [f32; 3],
+    /// Hits at t ≥ t_max are ignored. Offset 28.
+    pub t_max: f32,
+}
+
+/// The answer to one query ray. Must match WGSL `struct HitOut` (16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct HitOut {
+    /// Distance along the ray (in units of |dir|); t_max on a miss. Offset 0.
+    pub t: f32,
+    /// Primitive index, with `TRIANGLE_BIT` for triangles; `PRIM_NONE` on a miss. Offset 4.
+    pub prim: u32,
+    /// Barycentric weight of vertex b (triangles). Offset 8.
+    pub u: f32,
+    /// Barycentric weight of vertex c (triangles). Offset 12.
+    pub v: f32,
+}
