@@ -19,47 +19,34 @@ pub fn is_degenerate(v: &[[f32; 3]; 3]) -> bool {
     c == [0.0; 3]
 }
 
-/// The affine map of a mesh entry, in f64.
+/// The affine map of a mesh entry, in f64 with glam: scale, then rotate (x, then y, then
+/// z: Rz·Ry·Rx), then translate, rounded to f32 once at the end. Host-side geometry: both
+/// tracers read the same transformed f32 vertices, so its rounding is shared by
+/// construction (glam's `DMat3 * DVec3` sums each row left to right, without FMA).
 struct Transform {
-    scale: [f64; 3],
-    /// Row-major rotation Rz·Ry·Rx.
-    rot: [[f64; 3]; 3],
-    translate: [f64; 3],
+    scale: glam::DVec3,
+    rot: glam::DMat3,
+    translate: glam::DVec3,
 }
 
 impl Transform {
     fn new(scale: [f32; 3], rotate_deg: [f32; 3], translate: [f32; 3]) -> Self {
         let [ax, ay, az] = rotate_deg.map(|d| (d as f64).to_radians());
-        let (sx, cx) = ax.sin_cos();
-        let (sy, cy) = ay.sin_cos();
-        let (sz, cz) = az.sin_cos();
-        let rx = [[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]];
-        let ry = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
-        let rz = [[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]];
-        let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| {
-            let mut m = [[0.0; 3]; 3];
-            for (i, row) in m.iter_mut().enumerate() {
-                for (j, x) in row.iter_mut().enumerate() {
-                    *x = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-                }
-            }
-            m
-        };
+        let v = |a: [f32; 3]| glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
         Transform {
-            scale: scale.map(f64::from),
-            rot: mul(rz, mul(ry, rx)),
-            translate: translate.map(f64::from),
+            scale: v(scale),
+            rot: glam::DMat3::from_rotation_z(az)
+                * glam::DMat3::from_rotation_y(ay)
+                * glam::DMat3::from_rotation_x(ax),
+            translate: v(translate),
         }
     }
 
     fn apply(&self, p: [f32; 3]) -> [f32; 3] {
-        let s = [0, 1, 2].map(|k| p[k] as f64 * self.scale[k]);
-        [0, 1, 2].map(|i| {
-            (self.rot[i][0] * s[0]
-                + self.rot[i][1] * s[1]
-                + self.rot[i][2] * s[2]
-                + self.translate[i]) as f32
-        })
+        let p = glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+        (self.rot * (p * self.scale) + self.translate)
+            .as_vec3()
+            .to_array()
     }
 }
 
@@ -461,5 +448,58 @@ struct Gunzip(std::time::Instant);
 impl Drop for Gunzip {
     fn drop(&mut self) {
         crate::stages::record("gunzip", self.0.elapsed());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Transform;
+
+    /// The transform as it was written out by hand before glam: rows of Rz·Ry·Rx summed
+    /// left to right. glam's must give the same f32 vertices, bit for bit.
+    fn by_hand(scale: [f32; 3], rot: [f32; 3], tr: [f32; 3], p: [f32; 3]) -> [f32; 3] {
+        let [ax, ay, az] = rot.map(|d| (d as f64).to_radians());
+        let (sx, cx) = ax.sin_cos();
+        let (sy, cy) = ay.sin_cos();
+        let (sz, cz) = az.sin_cos();
+        let rx = [[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]];
+        let ry = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
+        let rz = [[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]];
+        let mul = |a: [[f64; 3]; 3], b: [[f64; 3]; 3]| {
+            let mut m = [[0.0; 3]; 3];
+            for (i, row) in m.iter_mut().enumerate() {
+                for (j, x) in row.iter_mut().enumerate() {
+                    *x = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
+                }
+            }
+            m
+        };
+        let r = mul(rz, mul(ry, rx));
+        let s = [0, 1, 2].map(|k| p[k] as f64 * scale[k] as f64);
+        [0, 1, 2].map(|i| (r[i][0] * s[0] + r[i][1] * s[1] + r[i][2] * s[2] + tr[i] as f64) as f32)
+    }
+
+    #[test]
+    fn glam_transform_equals_the_written_out_one() {
+        let mut x = 7u64;
+        let mut r = |lo: f32, hi: f32| {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            lo + (hi - lo) * ((x >> 40) as f32 / (1u64 << 24) as f32)
+        };
+        for _ in 0..10_000 {
+            let scale = [r(-3.0, 3.0), r(-3.0, 3.0), r(-3.0, 3.0)];
+            let rot = [r(-360.0, 360.0), r(-360.0, 360.0), r(-360.0, 360.0)];
+            let tr = [r(-100.0, 100.0), r(-100.0, 100.0), r(-100.0, 100.0)];
+            let p = [r(-50.0, 50.0), r(-50.0, 50.0), r(-50.0, 50.0)];
+            let xf = Transform::new(scale, rot, tr);
+            let (a, b) = (xf.apply(p), by_hand(scale, rot, tr, p));
+            assert_eq!(
+                a.map(f32::to_bits),
+                b.map(f32::to_bits),
+                "{scale:?} {rot:?} {tr:?} {p:?}"
+            );
+        }
     }
 }
