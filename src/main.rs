@@ -49,9 +49,31 @@ enum Backend {
     CpuF64,
 }
 
+/// The options every subcommand that loads a scene shares.
+#[derive(clap::Args)]
+struct CommonArgs {
+    /// Use the first Vulkan adapter whose name contains this.
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Read only files below the scene's own folder (meshes, MTLs; links followed).
+    #[arg(long)]
+    confine: bool,
+}
+
+/// The frame options of `render` and `compare`.
+#[derive(clap::Args)]
+struct FrameArgs {
+    /// Image size WxH (default: the scene's camera).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Triangle algorithm (default: the scene's).
+    #[arg(long)]
+    triangle: Option<TriangleAlgorithm>,
+}
+
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene to a PNG.
+    /// Render a scene to a PNG (or an EXR).
     Render {
         /// The scene file (TOML).
         scene: PathBuf,
@@ -64,35 +86,19 @@ enum Command {
         /// Which tracer.
         #[arg(long, value_enum, default_value = "auto")]
         backend: Backend,
-        /// Image size WxH (default: the scene's camera).
-        #[arg(long, value_parser = parse_size)]
-        size: Option<(u32, u32)>,
-        /// Triangle algorithm (default: the scene's).
-        #[arg(long)]
-        triangle: Option<TriangleAlgorithm>,
-        /// Use the first Vulkan adapter whose name contains this.
-        #[arg(long)]
-        adapter: Option<String>,
-        /// Read only files below the scene's own folder (meshes, MTLs; links followed).
-        #[arg(long)]
-        confine: bool,
+        #[command(flatten)]
+        frame: FrameArgs,
+        #[command(flatten)]
+        common: CommonArgs,
     },
     /// Render a scene on the GPU and on the CPU mirror and measure the difference.
     Compare {
         /// The scene file (TOML).
         scene: PathBuf,
-        /// Image size WxH (default: the scene's camera).
-        #[arg(long, value_parser = parse_size)]
-        size: Option<(u32, u32)>,
-        /// Triangle algorithm (default: the scene's).
-        #[arg(long)]
-        triangle: Option<TriangleAlgorithm>,
-        /// Use the first Vulkan adapter whose name contains this.
-        #[arg(long)]
-        adapter: Option<String>,
-        /// Read only files below the scene's own folder (meshes, MTLs; links followed).
-        #[arg(long)]
-        confine: bool,
+        #[command(flatten)]
+        frame: FrameArgs,
+        #[command(flatten)]
+        common: CommonArgs,
         /// Where to write the difference image.
         #[arg(long, default_value = "diff.png")]
         diff: PathBuf,
@@ -124,12 +130,8 @@ enum Command {
         /// Output folder.
         #[arg(long, default_value = "bench-out")]
         out: PathBuf,
-        /// Use the first Vulkan adapter whose name contains this.
-        #[arg(long)]
-        adapter: Option<String>,
-        /// Read only files below the scene's own folder (meshes, MTLs; links followed).
-        #[arg(long)]
-        confine: bool,
+        #[command(flatten)]
+        common: CommonArgs,
         /// Skip the GPU (CPU tracers only).
         #[arg(long)]
         no_gpu: bool,
@@ -316,10 +318,8 @@ fn run(cli: Cli) -> Result<()> {
             output,
             verbose,
             backend,
-            size,
-            triangle,
-            adapter,
-            confine,
+            frame: FrameArgs { size, triangle },
+            common: CommonArgs { adapter, confine },
         } => {
             if same_file(&scene, &output) {
                 bail!(
@@ -460,10 +460,9 @@ fn run(cli: Cli) -> Result<()> {
             size,
             runs,
             out,
-            adapter,
+            common: CommonArgs { adapter, confine },
             no_gpu,
             triangle,
-            confine,
         } => bench(scenes, size, triangle, runs, out, adapter, no_gpu, confine),
         Command::Diff { a, b, diff } => {
             glint::image::check_extension(&diff)?;
@@ -529,11 +528,9 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Compare {
             scene,
-            size,
-            triangle,
-            adapter,
+            frame: FrameArgs { size, triangle },
+            common: CommonArgs { adapter, confine },
             diff,
-            confine,
         } => {
             glint::image::check_extension(&diff)?;
             let s = load(&scene, confine)?;
