@@ -338,8 +338,10 @@ fn sigterm_during_encoding_leaves_no_temporary_file() {
             );
             std::thread::sleep(Duration::from_millis(1));
         }
-        Command::new("kill")
-            .args([signal, &child.id().to_string()])
+        // The shell's own `kill` (a builtin: no procps needed).
+        Command::new("sh")
+            .arg("-c")
+            .arg(format!("kill {signal} {}", child.id()))
             .status()
             .unwrap();
         let status = child.wait().unwrap();
