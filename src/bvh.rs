@@ -257,6 +257,20 @@ fn build_node(refs: &mut [PrimRef], offset: usize, depth: usize) -> Node {
     };
     debug_assert!(mid > 0 && mid < n);
 
+    interior(refs, offset, depth, bounds, axis, mid)
+}
+
+/// The interior node whose children are `refs[..mid]` and `refs[mid..]`, built in parallel
+/// when the node is large.
+fn interior(
+    refs: &mut [PrimRef],
+    offset: usize,
+    depth: usize,
+    bounds: Aabb,
+    axis: usize,
+    mid: usize,
+) -> Node {
+    let n = refs.len();
     let (left, right) = refs.split_at_mut(mid);
     let (l, r) = if n >= PARALLEL_MIN {
         rayon::join(
@@ -311,23 +325,7 @@ fn median_split(
             .total_cmp(&b.centre[axis])
             .then(a.id.cmp(&b.id))
     });
-    let (left, right) = refs.split_at_mut(mid);
-    let (l, r) = if n >= PARALLEL_MIN {
-        rayon::join(
-            || build_node(left, offset, depth + 1),
-            || build_node(right, offset + mid, depth + 1),
-        )
-    } else {
-        (
-            build_node(left, offset, depth + 1),
-            build_node(right, offset + mid, depth + 1),
-        )
-    };
-    Node::Interior {
-        bounds,
-        axis: axis as u32,
-        children: Box::new((l, r)),
-    }
+    interior(refs, offset, depth, bounds, axis, mid)
 }
 
 fn flatten(node: &Node, depth: usize, bvh: &mut Bvh) {
