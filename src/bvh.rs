@@ -144,12 +144,15 @@ impl Bvh {
         }
         let root = build_node(&mut refs, 0, 0);
         let mut bvh = Bvh {
-            nodes: Vec::with_capacity(2 * refs.len()),
+            nodes: Vec::new(),
             prim_ids: refs.iter().map(|r| r.id).collect(),
             depth: 0,
             largest_leaf: 0,
         };
+        // The references are done with before the flat tree is written: not both at once.
+        drop(refs);
         flatten(&root, 0, &mut bvh);
+        bvh.nodes.shrink_to_fit();
         bvh
     }
 }

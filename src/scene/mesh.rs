@@ -95,6 +95,7 @@ pub(super) fn load(
         let parsed = super::obj::parse(text).map_err(&fail)?;
         crate::stages::record("OBJ parse", t.elapsed());
         if let Some(parsed) = parsed {
+            drop(bytes); // the text is parsed: free it before the triangles are placed
             let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
             let material = v.material_index(&names, name, &format!("meshes[{i}].material"))?;
             if let Some(first) = parsed.short_faces.first() {
