@@ -60,3 +60,60 @@ fn frame_of_8192_squared_renders_in_tiles() {
     }
     eprintln!("{checked} pixels on the tile seams checked against the CPU mirror");
 }
+
+/// A scene larger than the device's buffers: `--backend gpu` fails naming the buffer and
+/// both sizes; `auto` on that adapter falls back to the CPU tracer, says so in one line, and
+/// renders. (`GLINT_MAX_BUFFER_BYTES` gives this adapter a smaller GPU's 1 MB limit, so
+/// 30,000 triangles, 1.44 MB, do not fit.)
+#[test]
+fn scenes_larger_than_the_gpu_fall_back_to_the_cpu_under_auto() {
+    let Some(gpu) = common::gpu() else { return };
+    let d = std::env::temp_dir().join(format!("glint-toolarge-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    let mut obj = String::new();
+    for i in 0..30_000 {
+        let (x, y) = ((i % 200) as f32 * 0.02 - 2.0, (i / 200) as f32 * 0.02 - 1.5);
+        obj += &format!(
+            "v {x} {y} 0\nv {} {y} 0\nv {x} {} 0\n",
+            x + 0.015,
+            y + 0.015
+        );
+    }
+    for i in 0..30_000 {
+        obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
+    }
+    std::fs::write(d.join("many.obj"), obj).unwrap();
+    let scene = d.join("many.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 60.0\nwidth = 64\n\
+         height = 48\n[materials.m]\nmodel = \"ambient\"\nka = [1.0, 1.0, 1.0]\n\
+         [[meshes]]\nfile = \"many.obj\"\nmaterial = \"m\"\n",
+    )
+    .unwrap();
+    let run = |backend: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+            .args(["render", scene.to_str().unwrap(), "-o"])
+            .arg(d.join("out.png"))
+            .args(["--backend", backend, "--adapter", &gpu.info.name])
+            .env("GLINT_MAX_BUFFER_BYTES", "1000000")
+            .output()
+            .unwrap()
+    };
+    let o = run("gpu");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "the GPU must refuse: {err}");
+    assert!(
+        err.contains("triangles needs 1440000 bytes") && err.contains("1000000"),
+        "{err}"
+    );
+    let o = run("auto");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(
+        err.matches("so the CPU tracer renders this").count(),
+        1,
+        "{err}"
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("cpu (f32)"));
+}

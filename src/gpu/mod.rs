@@ -137,6 +137,20 @@ fn private_runtime_dir() -> Option<std::path::PathBuf> {
     None
 }
 
+/// The adapter's limits, with the largest buffer capped at `GLINT_MAX_BUFFER_BYTES` when
+/// that is set: a smaller GPU's limits on this one, so that the too-large path (the error
+/// naming the buffer, and `auto`'s fall-back to the CPU) can be tried on any machine.
+fn capped_limits(mut l: wgpu::Limits) -> wgpu::Limits {
+    if let Some(cap) = std::env::var("GLINT_MAX_BUFFER_BYTES")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+    {
+        l.max_buffer_size = l.max_buffer_size.min(cap);
+        l.max_storage_buffer_binding_size = l.max_storage_buffer_binding_size.min(cap);
+    }
+    l
+}
+
 /// Whether an adapter is a CPU implementation (lavapipe, SwiftShader).
 pub fn is_cpu_adapter(info: &wgpu::AdapterInfo) -> bool {
     info.device_type == wgpu::DeviceType::Cpu
@@ -168,7 +182,7 @@ impl Gpu {
             label: Some("glint"),
             required_features: wgpu::Features::empty(),
             // Everything the adapter offers: large scenes need its largest storage buffers.
-            required_limits: adapter.limits(),
+            required_limits: capped_limits(adapter.limits()),
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device {
