@@ -132,13 +132,14 @@ pub(super) fn load(
             return finish(v, line, &key, &triangles[before..], &fail, warnings);
         }
     }
-    let scanned = scan_obj(text).map_err(&fail)?;
+    let short_faces = super::obj::check(text).map_err(&fail)?;
     crate::stages::record("OBJ check", t_check.elapsed());
-    for w in scanned {
+    if let Some(first) = short_faces.first() {
         warnings.push(format!(
-            "{}:{line}: {key}: {}: {w}",
+            "{}:{line}: {key}: {}: {}",
             v.path.display(),
-            obj_path.display()
+            obj_path.display(),
+            short_face_warning(short_faces.len(), *first)
         ));
     }
     let opts = tobj::LoadOptions {
@@ -338,74 +339,6 @@ fn short_face_warning(n: usize, first: usize) -> String {
         "{n} face(s) with fewer than three vertices dropped (line {first}{})",
         if n > 1 { " and others" } else { "" }
     )
-}
-
-/// Checks the OBJ lines tobj would reject without saying where, or drop in silence:
-/// `v` without three numbers and face indices that are not integers, are 0 or point past
-/// the vertices defined so far are errors naming the line; a face of fewer than three
-/// vertices is a warning naming the line (tobj drops it). Returns the warnings.
-pub fn scan_obj(text: &str) -> Result<Vec<String>, String> {
-    let mut warnings = Vec::new();
-    let mut vertices: i64 = 0;
-    let mut short_faces = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let line_no = n + 1;
-        let l = line.trim_start();
-        let Some(kw) = l.split_ascii_whitespace().next() else {
-            continue;
-        };
-        match kw {
-            "v" => {
-                let ok = l[1..]
-                    .split_ascii_whitespace()
-                    .take(3)
-                    .filter(|w| w.parse::<f32>().is_ok())
-                    .count();
-                if ok < 3 {
-                    return Err(format!(
-                        "line {line_no}: a vertex (`v`) needs three numbers: {:?}",
-                        trunc(l)
-                    ));
-                }
-                vertices += 1;
-            }
-            "f" => {
-                let mut count = 0;
-                for w in l[1..].split_ascii_whitespace() {
-                    let first = w.split('/').next().unwrap_or("");
-                    let ix: i64 = first.parse().map_err(|_| {
-                        format!("line {line_no}: face vertex {w:?} is not an index")
-                    })?;
-                    let ok = if ix > 0 {
-                        ix <= vertices
-                    } else {
-                        ix < 0 && -ix <= vertices
-                    };
-                    if !ok {
-                        return Err(format!(
-                            "line {line_no}: face vertex index {ix} is out of range ({vertices} vertices defined before it)"
-                        ));
-                    }
-                    count += 1;
-                }
-                if count < 3 {
-                    short_faces.push(line_no);
-                }
-            }
-            _ => {}
-        }
-    }
-    if let Some(first) = short_faces.first() {
-        warnings.push(short_face_warning(short_faces.len(), *first));
-    }
-    Ok(warnings)
-}
-
-fn trunc(s: &str) -> &str {
-    match s.char_indices().nth(60) {
-        Some((k, _)) => &s[..k],
-        None => s,
-    }
 }
 
 /// The first line (1-based) of an MTL whose Ka, Kd, Ks or Ke has fewer than three

@@ -32,26 +32,38 @@ struct Chunk {
 /// Parses `text`: `Ok(None)` when it needs tobj (materials or statements this reader does
 /// not know), `Err` with the line for a malformed position or face.
 pub fn parse(text: &str) -> Result<Option<Parsed>, String> {
+    parse_with(text, true)
+}
+
+/// Checks an OBJ that tobj will read (one with materials or other statements): the same
+/// errors, with their lines, as [`parse`] gives, for positions and faces; statements this
+/// reader does not know are skipped. Returns the lines of faces with fewer than three
+/// vertices, which tobj drops in silence.
+pub fn check(text: &str) -> Result<Vec<usize>, String> {
+    Ok(parse_with(text, false)?.map_or_else(Vec::new, |p| p.short_faces))
+}
+
+/// [`parse`]; with `strict` false, unknown statements are skipped instead of handing the
+/// file to tobj.
+fn parse_with(text: &str, strict: bool) -> Result<Option<Parsed>, String> {
     let bytes = text.as_bytes();
     let pieces = rayon::current_num_threads().max(1) * 4;
     let mut cuts = vec![0usize];
     for k in 1..pieces {
-        let at = bytes.len() * k / pieces;
-        let next = match bytes[at.max(*cuts.last().unwrap_or(&0))..]
+        let last = *cuts.last().expect("cuts starts with 0");
+        let from = (bytes.len() * k / pieces).max(last);
+        let next = bytes[from..]
             .iter()
             .position(|&b| b == b'\n')
-        {
-            Some(p) => at.max(*cuts.last().unwrap_or(&0)) + p + 1,
-            None => bytes.len(),
-        };
-        if next > *cuts.last().unwrap_or(&0) && next < bytes.len() {
+            .map_or(bytes.len(), |p| from + p + 1);
+        if next > last && next < bytes.len() {
             cuts.push(next);
         }
     }
     cuts.push(bytes.len());
     let chunks: Vec<Result<Option<Chunk>, (u32, String)>> = cuts
         .par_windows(2)
-        .map(|w| parse_chunk(&text[w[0]..w[1]]))
+        .map(|w| parse_chunk(&text[w[0]..w[1]], strict))
         .collect();
     // Line and vertex offsets of each chunk; the first error in file order wins.
     let mut done = Vec::with_capacity(chunks.len());
@@ -109,7 +121,7 @@ pub fn parse(text: &str) -> Result<Option<Parsed>, String> {
 }
 
 /// One chunk of whole lines. Lines are counted from 1 within the chunk.
-fn parse_chunk(text: &str) -> Result<Option<Chunk>, (u32, String)> {
+fn parse_chunk(text: &str, strict: bool) -> Result<Option<Chunk>, (u32, String)> {
     let mut c = Chunk::default();
     let mut face: Vec<i64> = Vec::with_capacity(8);
     for line in text.split('\n') {
@@ -153,7 +165,8 @@ fn parse_chunk(text: &str) -> Result<Option<Chunk>, (u32, String)> {
             }
             "vn" | "vt" | "o" | "g" | "s" => {}
             k if k.starts_with('#') => {}
-            _ => return Ok(None),
+            _ if strict => return Ok(None),
+            _ => {}
         }
     }
     // The chunk ends in '\n' (but the last), so split gives one empty line too many.
@@ -163,7 +176,8 @@ fn parse_chunk(text: &str) -> Result<Option<Chunk>, (u32, String)> {
     Ok(Some(c))
 }
 
-fn trunc(s: &str) -> &str {
+/// At most the first 60 characters of `s`, for error messages.
+pub(super) fn trunc(s: &str) -> &str {
     match s.char_indices().nth(60) {
         Some((k, _)) => &s[..k],
         None => s,
@@ -243,6 +257,16 @@ mod tests {
         );
         let e = parse("v 0 0 0\nv 1 nope 0\n").unwrap_err();
         assert!(e.starts_with("line 2: a vertex"), "{e}");
+        // What tobj reads is checked the same way, its other statements skipped.
+        let e = check("mtllib a.mtl\nv 0 0 0\nv 1 0 0\nusemtl x\nv 0 1 0\nf 1 2 5\n").unwrap_err();
+        assert!(
+            e.starts_with("line 6: face vertex index 5 is out of range"),
+            "{e}"
+        );
+        assert_eq!(
+            check("mtllib a.mtl\nv 0 0 0\nv 1 0 0\nf 1 2\n").unwrap(),
+            vec![4]
+        );
         let p = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\nf 1 2 3\n")
             .unwrap()
             .unwrap();
