@@ -355,12 +355,12 @@ fn run(cli: Cli) -> Result<()> {
             }
             let t0 = Instant::now();
             let bar = ProgressBar::new(t0);
-            let mut png = Sink::create(&output, format, w, h)?;
+            let mut sink = Sink::create(&output, format, w, h)?;
             let mut frame = std::time::Duration::ZERO;
             // The frame in bands of `band` rows, each written to the PNG as it comes: memory
             // stays bounded by a band, whatever the frame size.
             let cpu_bands =
-                |png: &mut Sink, frame: &mut std::time::Duration, f64: bool| -> Result<()> {
+                |sink: &mut Sink, frame: &mut std::time::Duration, f64: bool| -> Result<()> {
                     let mut y = 0;
                     while y < h {
                         let rows = band.min(h - y);
@@ -371,7 +371,7 @@ fn run(cli: Cli) -> Result<()> {
                             glint::cpu::render_f32_rows(&buf, spec, y, rows)
                         };
                         *frame += t.elapsed();
-                        glint::stages::time("PNG encode", || png.write_rows(&px))?;
+                        glint::stages::time("encode", || sink.write_rows(&px))?;
                         y += rows;
                         bar.show(y, h);
                     }
@@ -379,11 +379,11 @@ fn run(cli: Cli) -> Result<()> {
                 };
             let what = match renderer.tracer() {
                 glint::Tracer::Cpu => {
-                    cpu_bands(&mut png, &mut frame, false)?;
+                    cpu_bands(&mut sink, &mut frame, false)?;
                     "cpu (f32)".to_string()
                 }
                 glint::Tracer::CpuF64 => {
-                    cpu_bands(&mut png, &mut frame, true)?;
+                    cpu_bands(&mut sink, &mut frame, true)?;
                     "cpu-f64".to_string()
                 }
                 glint::Tracer::Gpu(gpu) => {
@@ -396,7 +396,7 @@ fn run(cli: Cli) -> Result<()> {
                         band,
                         &mut |y, px| {
                             if written.is_ok() {
-                                written = glint::stages::time("PNG encode", || png.write_rows(px));
+                                written = glint::stages::time("encode", || sink.write_rows(px));
                             }
                             bar.show(y + (px.len() / w as usize) as u32, h);
                         },
@@ -419,7 +419,7 @@ fn run(cli: Cli) -> Result<()> {
                             if backend == Backend::Auto =>
                         {
                             eprintln!("note: {e}; so the CPU tracer renders this");
-                            cpu_bands(&mut png, &mut frame, false)?;
+                            cpu_bands(&mut sink, &mut frame, false)?;
                             "cpu (f32)".to_string()
                         }
                         Err(e) => return Err(e.into()),
@@ -427,7 +427,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             };
             bar.finish();
-            glint::stages::time("PNG finish", || png.finish(&output))?;
+            glint::stages::time("write", || sink.finish(&output))?;
             println!(
                 "{}: {}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",
                 output.display(),

@@ -1,5 +1,5 @@
 //! Where time to first image goes: each stage of a render (read, gunzip, OBJ check and
-//! parse, transform, BVH build, flatten, trace, PNG encode) records its wall time here, and
+//! parse, transform, BVH build, flatten, trace, encode and write the image) records its wall time here, and
 //! `glint render -v` prints them. Recording is a mutex push per stage, not per primitive.
 
 use std::sync::Mutex;

@@ -4,6 +4,8 @@
 //! outside a confined scene's folder, the output checked before work, written through a
 //! symbolic link, and its temporary file removed on SIGTERM.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -405,17 +407,8 @@ fn primitives_beyond_the_f32_range_are_warned_about() {
         );
     }
     // The twin: everything the project ships is inside the range.
-    for name in [
-        "sphere",
-        "triangle",
-        "umbrella",
-        "bb8",
-        "mitsubishi",
-        "bb8-shadows",
-        "mitsubishi-shadows",
-    ] {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
-        let s = Scene::load(&path).unwrap();
+    for name in common::SHIPPED_SCENES {
+        let s = common::seed_scene(name);
         for algo in TriangleAlgorithm::ALL {
             assert!(
                 s.range_warnings(algo).is_empty(),

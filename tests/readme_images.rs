@@ -7,16 +7,6 @@ mod common;
 
 use glint::buffers::{SceneBuffers, Specialisation};
 
-const IMAGES: [&str; 7] = [
-    "sphere",
-    "triangle",
-    "umbrella",
-    "bb8",
-    "mitsubishi",
-    "bb8-shadows",
-    "mitsubishi-shadows",
-];
-
 fn rendered(name: &str) -> (u32, u32, Vec<u8>) {
     let scene = common::seed_scene(name);
     let (w, h) = scene.size();
@@ -45,7 +35,7 @@ fn differing(a: &(u32, u32, Vec<u8>), b: &(u32, u32, Vec<u8>)) -> usize {
 
 #[test]
 fn readme_images_are_what_the_code_renders() {
-    for name in IMAGES {
+    for name in common::SHIPPED_SCENES {
         let n = differing(&rendered(name), &committed(name));
         assert_eq!(
             n, 0,

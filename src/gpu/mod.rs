@@ -190,13 +190,9 @@ impl Gpu {
             message: e.to_string(),
         })?;
         let start_time = t0.elapsed();
-        let kernel = Kernel::new(&device)?;
         Ok(Gpu {
-            info,
-            device,
-            queue,
-            kernel,
             start_time,
+            ..Gpu::from_device(info, device, queue)?
         })
     }
 

@@ -160,6 +160,18 @@ use glint::scene::{Scene, TriangleAlgorithm};
 /// The five seed scenes.
 pub const SEED_SCENES: [&str; 5] = ["sphere", "triangle", "umbrella", "bb8", "mitsubishi"];
 
+/// Every scene in `scenes/` that needs no fetched mesh: the seed scenes and their shadowed
+/// variants (the README shows each).
+pub const SHIPPED_SCENES: [&str; 7] = [
+    "sphere",
+    "triangle",
+    "umbrella",
+    "bb8",
+    "mitsubishi",
+    "bb8-shadows",
+    "mitsubishi-shadows",
+];
+
 /// Loads `scenes/NAME.toml` from the crate root.
 pub fn seed_scene(name: &str) -> Scene {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
