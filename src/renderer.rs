@@ -78,10 +78,9 @@ impl Renderer {
             Backend::CpuF64 => (Tracer::CpuF64, None),
             Backend::Gpu => (gpu(adapter)?, None),
             Backend::Auto => {
-                let infos: Vec<wgpu::AdapterInfo> = crate::gpu::adapters()
-                    .iter()
-                    .map(|a| a.get_info())
-                    .collect();
+                let t0 = std::time::Instant::now();
+                let list = crate::gpu::adapters();
+                let infos: Vec<wgpu::AdapterInfo> = list.iter().map(|a| a.get_info()).collect();
                 if infos.is_empty() {
                     (
                         Tracer::Cpu,
@@ -103,7 +102,9 @@ impl Renderer {
                         )),
                     )
                 } else {
-                    (gpu(adapter)?, None)
+                    // The list already enumerated: no second instance.
+                    let g = Gpu::from_adapters(list, adapter, t0)?;
+                    (Tracer::Gpu(Box::new(g)), None)
                 }
             }
         };

@@ -160,7 +160,18 @@ impl Gpu {
     /// Opens the best adapter, or the first whose name contains `name` (case-insensitive).
     pub fn new(name: Option<&str>) -> Result<Gpu, GpuError> {
         let t0 = Instant::now();
-        let list = adapters();
+        Gpu::from_adapters(adapters(), name, t0)
+    }
+
+    /// [`Gpu::new`] from an adapter list already enumerated ([`adapters`], best first), so
+    /// a caller that looked at the list does not enumerate twice; `since` starts the clock
+    /// of `start_time`.
+    pub fn from_adapters(
+        list: Vec<wgpu::Adapter>,
+        name: Option<&str>,
+        since: Instant,
+    ) -> Result<Gpu, GpuError> {
+        let t0 = since;
         if list.is_empty() {
             return Err(GpuError::NoAdapter);
         }
