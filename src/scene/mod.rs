@@ -186,29 +186,7 @@ impl Scene {
     /// Reads and validates the scene file at `path` (meshes relative to it).
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let bytes = read_limited(path, max_input_bytes()).map_err(|e| match e {
-            ReadError::Io(error) => SceneError::Io {
-                file: path.to_owned(),
-                error,
-            },
-            other => SceneError::Syntax {
-                file: path.to_owned(),
-                line: 1,
-                key: "(file)".into(),
-                message: other.to_string(),
-            },
-        })?;
-        let src = String::from_utf8(bytes).map_err(|e| {
-            let pos = e.utf8_error().valid_up_to();
-            let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
-            SceneError::Syntax {
-                file: path.to_owned(),
-                line: line_of(&text, pos),
-                key: "(file)".into(),
-                message: format!("not UTF-8 at byte {pos}"),
-            }
-        })?;
-        Scene::parse(&src, path)
+        Scene::parse(&read_scene_text(path)?, path)
     }
 
     /// [`Scene::load`] in confined mode: the scene may read only files below its own folder
@@ -223,15 +201,8 @@ impl Scene {
             file: root.to_owned(),
             error,
         })?;
-        let bytes = read_limited(path, max_input_bytes()).map_err(|e| SceneError::Syntax {
-            file: path.to_owned(),
-            line: 1,
-            key: "(file)".into(),
-            message: e.to_string(),
-        })?;
-        let src = String::from_utf8_lossy(&bytes).into_owned();
         let read = confined_reader(root);
-        Scene::parse_with(&src, path, &read)
+        Scene::parse_with(&read_scene_text(path)?, path, &read)
     }
 
     /// Parses and validates scene text; `path` names it in errors and anchors mesh paths.
@@ -250,6 +221,33 @@ impl Scene {
     pub fn size(&self) -> (u32, u32) {
         (self.camera.width, self.camera.height)
     }
+}
+
+/// A scene file's text: a regular file within the input limit, in UTF-8 (else an error
+/// naming the line where it stops being UTF-8).
+fn read_scene_text(path: &Path) -> Result<String, SceneError> {
+    let bytes = read_limited(path, max_input_bytes()).map_err(|e| match e {
+        ReadError::Io(error) => SceneError::Io {
+            file: path.to_owned(),
+            error,
+        },
+        other => SceneError::Syntax {
+            file: path.to_owned(),
+            line: 1,
+            key: "(file)".into(),
+            message: other.to_string(),
+        },
+    })?;
+    String::from_utf8(bytes).map_err(|e| {
+        let pos = e.utf8_error().valid_up_to();
+        let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
+        SceneError::Syntax {
+            file: path.to_owned(),
+            line: line_of(&text, pos),
+            key: "(file)".into(),
+            message: format!("not UTF-8 at byte {pos}"),
+        }
+    })
 }
 
 fn syntax_error(src: &str, path: &Path, e: &toml::de::Error) -> SceneError {
