@@ -539,6 +539,8 @@ fn run(cli: Cli) -> Result<()> {
             for w in s.range_warnings(algo) {
                 eprintln!("warning: {w}");
             }
+            // compare holds three whole f32 frames (GPU, CPU, f64) and a difference image.
+            check_memory(w, h, w as u64 * h as u64 * 16 * 4)?;
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
             let gpu = Gpu::new(adapter.as_deref())?;
