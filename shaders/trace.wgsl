@@ -16,7 +16,7 @@
 //
 // The struct layouts are owned by `src/buffers.rs`; `tests/layout.rs` checks them with naga.
 
-// ---- specialisation (set per scene by `src/gpu/pipeline.rs::Specialisation`) ----------
+// ---- specialisation (set per scene by `src/buffers.rs::Specialisation`) ---------------
 
 /// The scene has spheres: without them the sphere loop is not compiled.
 override HAS_SPHERES: bool = true;
@@ -32,6 +32,10 @@ override USES_PHONG: bool = true;
 override SHADOWS: bool = false;
 /// Traverse the BVH (`nodes`, `prim_ids`); else test every primitive (tiny scenes).
 override USE_BVH: bool = true;
+/// Some triangle has vertex normals (`normals`): shade it with their interpolation.
+override SMOOTH: bool = false;
+/// `params.samples`² rays a pixel (else one through its centre).
+override ANTIALIAS: bool = false;
 
 // ---- constants (each one's story is in `src/buffers.rs`) ------------------------------
 
@@ -42,6 +46,7 @@ const TRIANGLE_NAIVE: u32 = 0u;
 const TRIANGLE_MOLLER_TRUMBORE: u32 = 1u;
 const TRIANGLE_WATERTIGHT: u32 = 2u;
 const PRIM_NONE: u32 = 0xffffffffu;
+const FLAT: u32 = 0u; // Triangle::normals of a flat triangle
 const TRIANGLE_BIT: u32 = 0x80000000u;
 const INFINITY: f32 = 3.40282347e38; // f32::MAX: a t that every real hit beats
 const SHADOW_EPSILON: f32 = 1.1920929e-7; // see buffers::SHADOW_EPSILON
@@ -71,8 +76,8 @@ struct Params {
     tile_width: u32,
     tile_height: u32,
     n_nodes: u32,
+    samples: u32,
     _pad0: u32,
-    _pad1: u32,
 }
 
 struct Sphere {
@@ -88,9 +93,18 @@ struct Triangle {
     a: vec3<f32>,
     material: u32,
     b: vec3<f32>,
-    _pad0: u32,
+    normals: u32,
     c: vec3<f32>,
+    _pad0: u32,
+}
+
+struct VertexNormals {
+    na: vec3<f32>,
+    _pad0: u32,
+    nb: vec3<f32>,
     _pad1: u32,
+    nc: vec3<f32>,
+    _pad2: u32,
 }
 
 struct BvhNode {
@@ -140,6 +154,7 @@ struct HitOut {
 @group(0) @binding(7) var<storage, read_write> hits: array<HitOut>;
 @group(0) @binding(8) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(9) var<storage, read> prim_ids: array<u32>;
+@group(0) @binding(10) var<storage, read> normals: array<VertexNormals>;
 
 // ---- small helpers ---------------------------------------------------------------------
 
@@ -182,10 +197,11 @@ fn in_interval(t: f32, t_min: f32, t_max: f32) -> bool {
 
 // ---- the camera ------------------------------------------------------------------------
 
-/// The primary ray through the centre of pixel (i, j); SPEC.md's formula, left to right.
-fn camera_ray(i: u32, j: u32) -> Ray {
-    let x = ((f32(i) + 0.5) / f32(params.width) * 2.0 - 1.0) * params.tan_half * params.aspect;
-    let y = (1.0 - (f32(j) + 0.5) / f32(params.height) * 2.0) * params.tan_half;
+/// The primary ray through the point (dx, dy) of pixel (i, j), each in [0, 1) from its
+/// top-left corner; SPEC.md's formula, left to right (the centre is (0.5, 0.5)).
+fn camera_ray(i: u32, j: u32, dx: f32, dy: f32) -> Ray {
+    let x = ((f32(i) + dx) / f32(params.width) * 2.0 - 1.0) * params.tan_half * params.aspect;
+    let y = (1.0 - (f32(j) + dy) / f32(params.height) * 2.0) * params.tan_half;
     let dir = normalize(params.forward + params.right * x + params.up * y);
     return Ray(params.eye, dir);
 }
@@ -711,6 +727,50 @@ fn hit_material(hit: Hit) -> u32 {
     return spheres[hit.prim].material;
 }
 
+/// How a hit is shaded: the normal that lights it and the point its shadow rays leave.
+struct Shading {
+    n: vec3<f32>,
+    p: vec3<f32>,
+}
+
+/// The shading of a hit at `p` whose geometric normal, turned to face the ray, is `n`: `n`
+/// and `p` themselves, unless the hit triangle has vertex normals. Then the normal is their
+/// interpolation with the hit's barycentrics (w, u, v for a, b, c; all three turned when
+/// it would face away from `n`), and shadow rays leave from Hanika's point ("Hacking the
+/// Shadow Terminator", Ray Tracing Gems II, ch. 4): `p` lifted onto the mean of its
+/// projections on the vertices' tangent planes (only planes that lie above `p` lift it).
+/// That curved point sees the light past the neighbouring triangles that the smooth
+/// normal pretends away, so the terminator does not fall in blocks of whole triangles.
+fn shading_at(hit: Hit, p: vec3<f32>, n: vec3<f32>) -> Shading {
+    if !SMOOTH || (hit.prim & TRIANGLE_BIT) == 0u {
+        return Shading(n, p);
+    }
+    let tri = triangles[hit.prim & ~TRIANGLE_BIT];
+    if tri.normals == FLAT {
+        return Shading(n, p);
+    }
+    let vn = normals[tri.normals];
+    let w = 1.0 - hit.u - hit.v;
+    var na = vn.na;
+    var nb = vn.nb;
+    var nc = vn.nc;
+    var mixed = na * w + nb * hit.u + nc * hit.v;
+    if dot(mixed, n) < 0.0 {
+        na = -na;
+        nb = -nb;
+        nc = -nc;
+        mixed = -mixed;
+    }
+    if !(dot(mixed, mixed) > 0.0) {
+        return Shading(n, p); // opposite vertex normals cancel: nothing to interpolate
+    }
+    let da = max0(dot(tri.a - p, na));
+    let db = max0(dot(tri.b - p, nb));
+    let dc = max0(dot(tri.c - p, nc));
+    let lifted = p + na * (w * da) + nb * (hit.u * db) + nc * (hit.v * dc);
+    return Shading(normalize(mixed), lifted);
+}
+
 /// The offset origin of a shadow ray from `p` with facing normal `n` (buffers::SHADOW_EPSILON).
 fn shadow_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let scale = max2(max2(abs(p.x), abs(p.y)), max2(abs(p.z), 1.0));
@@ -726,6 +786,7 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     if dot(n, ray.dir) > 0.0 {
         n = -n;
     }
+    let sh = shading_at(hit, p, n);
     var color = params.ambient * m.ka;
     if USES_DIFFUSE && m.model != MODEL_AMBIENT {
         // The view vector is the reversed ray. Not `normalize(ray.origin - p)`: that is
@@ -737,12 +798,12 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
             let light = lights[k];
             let to_light = light.position - p;
             let l = normalize(to_light);
-            let ndl = dot(n, l);
+            let ndl = dot(sh.n, l);
             if !(ndl > 0.0) {
                 continue;
             }
             if SHADOWS {
-                let o = shadow_origin(p, n);
+                let o = shadow_origin(sh.p, n);
                 let d = light.position - o;
                 if occluded(Ray(o, d), 0.0, 1.0, hit.prim) {
                     continue;
@@ -750,7 +811,7 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
             }
             color = color + light.color * m.kd * ndl;
             if USES_PHONG && m.model == MODEL_PHONG {
-                let r = n * (2.0 * ndl) - l;
+                let r = sh.n * (2.0 * ndl) - l;
                 let rv = max0(dot(r, v));
                 color = color + light.color * m.ks * phong_power(rv, m);
             }
@@ -759,14 +820,46 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     return vec3<f32>(clamp01(color.x), clamp01(color.y), clamp01(color.z));
 }
 
-/// The colour of pixel (i, j) and, in w, the hit distance (−1 for a miss).
-fn trace_pixel(i: u32, j: u32) -> vec4<f32> {
-    let ray = camera_ray(i, j);
+/// The colour seen through the point (dx, dy) of pixel (i, j) and, in w, the hit
+/// distance (−1 for a miss).
+fn trace_sample(i: u32, j: u32, dx: f32, dy: f32) -> vec4<f32> {
+    let ray = camera_ray(i, j, dx, dy);
     let hit = closest_hit(ray, 0.0, INFINITY);
     if hit.prim == PRIM_NONE {
         return vec4<f32>(params.background, -1.0);
     }
     return vec4<f32>(shade(ray, hit), hit.t);
+}
+
+/// The position of sample s of n along a pixel side: (s + 0.5) / n.
+fn sample_offset(s: u32, n: u32) -> f32 {
+    return (f32(s) + 0.5) / f32(n);
+}
+
+/// The colour of pixel (i, j) and, in w, the hit distance (−1 for a miss). With
+/// antialiasing, N = params.samples: the N×N points ((sx + 0.5) / N, (sy + 0.5) / N), rows
+/// sy top to bottom, each row sx left to right; their colours summed in that order and
+/// divided by N² (a box filter); w is the nearest hit's t (−1 when every sample misses).
+/// One sample is one ray through the centre, the image without antialiasing to the bit.
+fn trace_pixel(i: u32, j: u32) -> vec4<f32> {
+    if !ANTIALIAS {
+        return trace_sample(i, j, 0.5, 0.5);
+    }
+    let n = params.samples;
+    var sum = vec3<f32>(0.0, 0.0, 0.0);
+    var t_near = -1.0;
+    for (var sy = 0u; sy < n; sy = sy + 1u) {
+        let dy = sample_offset(sy, n);
+        for (var sx = 0u; sx < n; sx = sx + 1u) {
+            let dx = sample_offset(sx, n);
+            let s = trace_sample(i, j, dx, dy);
+            sum = sum + s.xyz;
+            if s.w >= 0.0 && (t_near < 0.0 || s.w < t_near) {
+                t_near = s.w;
+            }
+        }
+    }
+    return vec4<f32>(sum / f32(n * n), t_near);
 }
 
 // ---- entry points ------------------------------------------------------------------------

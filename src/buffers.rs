@@ -24,6 +24,10 @@ pub struct SceneBuffers {
     pub nodes: Vec<BvhNode>,
     /// Primitive ids in BVH leaf order.
     pub prim_ids: Vec<u32>,
+    /// Vertex normals of the smooth triangles, entry 0 unused (`Triangle::normals` = `FLAT`
+    /// names no entry); empty when no triangle is smooth, and then the pipeline's `SMOOTH`
+    /// is off and the shader never reads it.
+    pub normals: Vec<VertexNormals>,
     /// For the CPU only: `triangles[prim_ids[k]]` at k (a zeroed triangle where a sphere
     /// is), so that the packet tracer reads a leaf's triangles from consecutive memory.
     /// Derived by [`SceneBuffers::assemble`]; the GPU never sees it.
@@ -70,6 +74,7 @@ impl SceneBuffers {
             tile_y: 0,
             tile_width: width,
             tile_height: height,
+            samples: cam.samples,
             ..Params::default()
         };
         let materials: Vec<Material> = scene
@@ -98,7 +103,7 @@ impl SceneBuffers {
                 ..Sphere::default()
             })
             .collect();
-        let triangles: Vec<Triangle> = scene
+        let mut triangles: Vec<Triangle> = scene
             .triangles
             .iter()
             .map(|t| Triangle {
@@ -109,6 +114,22 @@ impl SceneBuffers {
                 ..Triangle::default()
             })
             .collect();
+        // Entry 0 stands for "flat"; each smooth triangle names its own entry.
+        let mut normals = Vec::new();
+        for mesh in &scene.smooth {
+            if normals.is_empty() {
+                normals.push(VertexNormals::default());
+            }
+            for (k, n) in mesh.normals.iter().enumerate() {
+                triangles[mesh.first + k].normals = normals.len() as u32;
+                normals.push(VertexNormals {
+                    na: n[0],
+                    nb: n[1],
+                    nc: n[2],
+                    ..VertexNormals::default()
+                });
+            }
+        }
         let lights = scene
             .lights
             .iter()
@@ -118,19 +139,23 @@ impl SceneBuffers {
                 ..Light::default()
             })
             .collect();
-        SceneBuffers::assemble(
-            params,
-            spheres,
-            triangles,
-            materials,
-            lights,
-            algo,
-            scene.shadows,
-        )
+        SceneBuffers {
+            normals,
+            ..SceneBuffers::assemble(
+                params,
+                spheres,
+                triangles,
+                materials,
+                lights,
+                algo,
+                scene.shadows,
+            )
+        }
     }
 
     /// Puts buffers together from their parts and builds the BVH over the primitives;
-    /// `params.n_spheres`, `n_triangles`, `n_lights` and `n_nodes` are set from the parts.
+    /// `params.n_spheres`, `n_triangles`, `n_lights` and `n_nodes` are set from the parts,
+    /// `params.samples` is at least 1, and no triangle is smooth (`normals` is empty).
     pub fn assemble(
         params: Params,
         spheres: Vec<Sphere>,
@@ -160,6 +185,7 @@ impl SceneBuffers {
                 n_triangles: triangles.len() as u32,
                 n_lights: lights.len() as u32,
                 n_nodes: bvh.nodes.len() as u32,
+                samples: params.samples.max(1),
                 ..params
             },
             spheres,
@@ -168,6 +194,7 @@ impl SceneBuffers {
             lights,
             nodes: bvh.nodes,
             prim_ids: bvh.prim_ids,
+            normals: Vec::new(),
             leaf_triangles,
             triangle_algo: algo.code(),
             shadows,
@@ -193,6 +220,10 @@ pub struct Specialisation {
     pub shadows: bool,
     /// WGSL `USE_BVH`: traverse the BVH (else test every primitive).
     pub use_bvh: bool,
+    /// WGSL `SMOOTH`: some triangle has vertex normals.
+    pub smooth: bool,
+    /// WGSL `ANTIALIAS`: `params.samples`² rays per pixel (else one through the centre).
+    pub antialias: bool,
 }
 
 /// Scenes with at most this many primitives are traced by testing every primitive: a
@@ -210,11 +241,15 @@ impl Specialisation {
             uses_phong: buf.materials.iter().any(|m| m.model == MODEL_PHONG),
             shadows: buf.shadows,
             use_bvh: buf.spheres.len() + buf.triangles.len() > BRUTE_FORCE_MAX,
+            smooth: !buf.normals.is_empty(),
+            antialias: buf.params.samples > 1,
         }
     }
 
     /// Everything compiled in (the one triangle algorithm still chosen): the general
-    /// pipeline that the benchmark sets beside the specialised one.
+    /// pipeline that the benchmark sets beside the specialised one. It gives the same
+    /// image: a flat triangle takes the geometric normal and one sample a pixel is one ray
+    /// through its centre whether or not `SMOOTH` and `ANTIALIAS` are compiled in.
     pub fn general(buf: &SceneBuffers) -> Self {
         Specialisation {
             has_spheres: true,
@@ -224,6 +259,8 @@ impl Specialisation {
             uses_phong: true,
             shadows: buf.shadows,
             use_bvh: true,
+            smooth: true,
+            antialias: true,
         }
     }
 
@@ -233,7 +270,7 @@ impl Specialisation {
     }
 
     /// The `(name, value)` pairs for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 7] {
+    pub fn constants(&self) -> [(&'static str, f64); 9] {
         let b = |x: bool| if x { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -243,6 +280,8 @@ impl Specialisation {
             ("USES_PHONG", b(self.uses_phong)),
             ("SHADOWS", b(self.shadows)),
             ("USE_BVH", b(self.use_bvh)),
+            ("SMOOTH", b(self.smooth)),
+            ("ANTIALIAS", b(self.antialias)),
         ]
     }
 }

@@ -69,6 +69,9 @@ struct FrameArgs {
     /// Triangle algorithm (default: the scene's).
     #[arg(long)]
     triangle: Option<TriangleAlgorithm>,
+    /// Antialiasing: N×N samples a pixel (default: the scene camera's `samples`).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=glint::scene::MAX_SAMPLES as i64))]
+    samples: Option<u32>,
 }
 
 #[derive(Subcommand)]
@@ -138,6 +141,9 @@ enum Command {
         /// Only this triangle algorithm (default: all three where a scene has triangles).
         #[arg(long)]
         triangle: Option<TriangleAlgorithm>,
+        /// Antialiasing for every scene: N×N samples a pixel (default: each scene's own).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=glint::scene::MAX_SAMPLES as i64))]
+        samples: Option<u32>,
     },
 }
 
@@ -318,7 +324,12 @@ fn run(cli: Cli) -> Result<()> {
             output,
             verbose,
             backend,
-            frame: FrameArgs { size, triangle },
+            frame:
+                FrameArgs {
+                    size,
+                    triangle,
+                    samples,
+                },
             common: CommonArgs { adapter, confine },
         } => {
             if same_file(&scene, &output) {
@@ -330,7 +341,8 @@ fn run(cli: Cli) -> Result<()> {
             let start = Instant::now();
             // Before any work: the folder exists and a file can be made there.
             glint::image::check_writable(&output)?;
-            let s = load(&scene, confine)?;
+            let mut s = load(&scene, confine)?;
+            s.camera.samples = samples.unwrap_or(s.camera.samples);
             let (w, h) = size.unwrap_or(s.size());
             let algo = triangle.unwrap_or(s.triangle);
             for w in s.range_warnings(algo) {
@@ -463,7 +475,10 @@ fn run(cli: Cli) -> Result<()> {
             common: CommonArgs { adapter, confine },
             no_gpu,
             triangle,
-        } => bench(scenes, size, triangle, runs, out, adapter, no_gpu, confine),
+            samples,
+        } => bench(
+            scenes, size, triangle, samples, runs, out, adapter, no_gpu, confine,
+        ),
         Command::Diff { a, b, diff } => {
             glint::image::check_extension(&diff)?;
             let (x, y) = (
@@ -528,12 +543,18 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Compare {
             scene,
-            frame: FrameArgs { size, triangle },
+            frame:
+                FrameArgs {
+                    size,
+                    triangle,
+                    samples,
+                },
             common: CommonArgs { adapter, confine },
             diff,
         } => {
             glint::image::check_extension(&diff)?;
-            let s = load(&scene, confine)?;
+            let mut s = load(&scene, confine)?;
+            s.camera.samples = samples.unwrap_or(s.camera.samples);
             let (w, h) = size.unwrap_or(s.size());
             let algo = triangle.unwrap_or(s.triangle);
             for w in s.range_warnings(algo) {
@@ -587,6 +608,7 @@ fn bench(
     scenes: Vec<PathBuf>,
     size: (u32, u32),
     triangle: Option<TriangleAlgorithm>,
+    samples: Option<u32>,
     runs: usize,
     out: PathBuf,
     adapter: Option<String>,
@@ -610,7 +632,9 @@ fn bench(
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        list.push((name, load(p, confine)?));
+        let mut s = load(p, confine)?;
+        s.camera.samples = samples.unwrap_or(s.camera.samples);
+        list.push((name, s));
     }
     let gpu = if no_gpu {
         None

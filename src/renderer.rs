@@ -37,6 +37,9 @@ pub struct RenderOptions {
     pub size: Option<(u32, u32)>,
     /// Triangle algorithm (default: the scene's).
     pub triangle: Option<TriangleAlgorithm>,
+    /// Antialiasing, N×N samples a pixel, clamped to 1..=[`crate::scene::MAX_SAMPLES`]
+    /// (default: the scene camera's `samples`).
+    pub samples: Option<u32>,
 }
 
 /// Why a render failed.
@@ -148,7 +151,10 @@ impl Renderer {
     pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Image, RenderError> {
         let (w, h) = options.size.unwrap_or(scene.size());
         let algo = options.triangle.unwrap_or(scene.triangle);
-        let buf = SceneBuffers::new(scene, w, h, algo);
+        let mut buf = SceneBuffers::new(scene, w, h, algo);
+        if let Some(n) = options.samples {
+            buf.params.samples = n.clamp(1, crate::scene::MAX_SAMPLES);
+        }
         let spec = Specialisation::for_scene(&buf);
         Ok(match &self.tracer {
             Tracer::Cpu => crate::cpu::render_f32(&buf, spec),

@@ -3,7 +3,9 @@
 
 use std::mem::{offset_of, size_of};
 
-use glint::buffers::{BvhNode, HitOut, Light, Material, Params, RayIn, Sphere, Triangle};
+use glint::buffers::{
+    BvhNode, HitOut, Light, Material, Params, RayIn, Sphere, Triangle, VertexNormals,
+};
 use glint::gpu::SHADER_SOURCE;
 
 fn module() -> naga::Module {
@@ -81,8 +83,8 @@ fn shared_structs_match_wgsl() {
             tile_width,
             tile_height,
             n_nodes,
-            _pad0,
-            _pad1
+            samples,
+            _pad0
         ]
     );
     check_struct!(
@@ -91,7 +93,18 @@ fn shared_structs_match_wgsl() {
         "Sphere",
         [center, radius, material, _pad0, _pad1, _pad2]
     );
-    check_struct!(&m, Triangle, "Triangle", [a, material, b, _pad0, c, _pad1]);
+    check_struct!(
+        &m,
+        Triangle,
+        "Triangle",
+        [a, material, b, normals, c, _pad0]
+    );
+    check_struct!(
+        &m,
+        VertexNormals,
+        "VertexNormals",
+        [na, _pad0, nb, _pad1, nc, _pad2]
+    );
     check_struct!(&m, Material, "Material", [ka, model, kd, n, ks, n_int]);
     check_struct!(&m, BvhNode, "BvhNode", [lo, first, hi, count_axis]);
     check_struct!(&m, Light, "Light", [position, _pad0, color, _pad1]);
@@ -150,6 +163,7 @@ fn shader_constants_match_rust() {
         naga::Literal::U32(TRIANGLE_WATERTIGHT)
     );
     assert_eq!(find("PRIM_NONE"), naga::Literal::U32(PRIM_NONE));
+    assert_eq!(find("FLAT"), naga::Literal::U32(FLAT));
     assert_eq!(find("TRIANGLE_BIT"), naga::Literal::U32(TRIANGLE_BIT));
     assert_eq!(find("INFINITY"), naga::Literal::F32(INFINITY));
     assert_eq!(find("SHADOW_EPSILON"), naga::Literal::F32(SHADOW_EPSILON));
@@ -169,6 +183,8 @@ fn shader_constants_match_rust() {
         uses_phong: true,
         shadows: false,
         use_bvh: true,
+        smooth: true,
+        antialias: true,
     };
     for (name, _) in spec.constants() {
         assert!(

@@ -59,7 +59,7 @@ fn huge_floor_casts_no_shadow_on_itself() {
         let mut floor = 0;
         for j in 0..240 {
             for i in 0..320 {
-                let ray = trace::camera_ray(&g, i, j);
+                let ray = trace::camera_ray(&g, i, j, 0.5, 0.5);
                 let hit = trace::closest_hit(&g, ray, 0.0, f32::MAX);
                 if hit.prim == PRIM_NONE {
                     continue;
@@ -167,7 +167,7 @@ fn contact_shadow_has_no_lit_gap() {
     let (mut leaks, mut shadowed) = (0, 0);
     for j in 0..240u32 {
         for i in 0..320u32 {
-            let ray = trace::camera_ray(&g, i, j);
+            let ray = trace::camera_ray(&g, i, j, 0.5, 0.5);
             let hit = trace::closest_hit(&g, ray, 0.0, f32::MAX);
             if hit.prim != glint::buffers::TRIANGLE_BIT {
                 continue;
@@ -249,7 +249,8 @@ material = "m"
         let top: Vec<bool> = (0..120u32)
             .flat_map(|j| (0..160u32).map(move |i| (i, j)))
             .map(|(i, j)| {
-                let hit = trace::closest_hit(&g, trace::camera_ray(&g, i, j), 0.0, f32::MAX);
+                let hit =
+                    trace::closest_hit(&g, trace::camera_ray(&g, i, j, 0.5, 0.5), 0.0, f32::MAX);
                 hit.prim == glint::buffers::TRIANGLE_BIT | 2
             })
             .collect();

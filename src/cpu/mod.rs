@@ -187,6 +187,7 @@ fn globals_f64<'a>(scene: &Scene, buf: &'a SceneBuffers, spec: Specialisation) -
         aspect: w as f64 / h as f64,
         width: w,
         height: h,
+        samples: buf.params.samples,
     };
     Globals { cam, buf, spec }
 }

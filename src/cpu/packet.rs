@@ -23,7 +23,8 @@
 use super::real::V3;
 use super::trace::{
     BVH_STACK, Globals, Hit, Ray, Shear, clamp01, edge_function, finite_bound, hit_prim,
-    hit_sphere, hit_triangle, in_interval, max0, nearer, phong_power, shadow_origin, tie_bound,
+    hit_sphere, hit_triangle, in_interval, max0, nearer, phong_power, sample_offset, shading_at,
+    shadow_origin, tie_bound,
 };
 use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE,
@@ -743,13 +744,18 @@ unsafe fn trace_packet_avx2(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANE
     trace_packet_body(g, i, j)
 }
 
-/// `camera_ray` for the pixels of the block at (i, j), lane by lane with the same
-/// operations in the same order, written as lane loops so that they vectorise; and the
-/// lanes whose pixel lies inside the image.
+/// `camera_ray` through the point (dx, dy) of each pixel of the block at (i, j), lane by
+/// lane with the same operations in the same order, written as lane loops so that they
+/// vectorise; and the lanes whose pixel lies inside the image.
 #[inline(always)]
-pub fn camera_rays(g: &Globals<f32>, i: u32, j: u32) -> ([Ray<f32>; LANES], Mask) {
+pub fn camera_rays(
+    g: &Globals<f32>,
+    i: u32,
+    j: u32,
+    dx: f32,
+    dy: f32,
+) -> ([Ray<f32>; LANES], Mask) {
     let c = &g.cam;
-    let half = 1.0f32 / (1.0 + 1.0);
     let two = 1.0f32 + 1.0;
     let mut active: Mask = 0;
     for l in 0..LANES {
@@ -760,8 +766,8 @@ pub fn camera_rays(g: &Globals<f32>, i: u32, j: u32) -> ([Ray<f32>; LANES], Mask
     for l in 0..LANES {
         let fi = (i + l as u32 % PACKET_W) as f32;
         let fj = (j + l as u32 / PACKET_W) as f32;
-        let x = ((fi + half) / c.width as f32 * two - 1.0) * c.tan_half * c.aspect;
-        let y = (1.0 - (fj + half) / c.height as f32 * two) * c.tan_half;
+        let x = ((fi + dx) / c.width as f32 * two - 1.0) * c.tan_half * c.aspect;
+        let y = (1.0 - (fj + dy) / c.height as f32 * two) * c.tan_half;
         d[0][l] = c.forward.x + c.right.x * x + c.up.x * y;
         d[1][l] = c.forward.y + c.right.y * x + c.up.y * y;
         d[2][l] = c.forward.z + c.right.z * x + c.up.z * y;
@@ -780,9 +786,41 @@ pub fn camera_rays(g: &Globals<f32>, i: u32, j: u32) -> ([Ray<f32>; LANES], Mask
     (rays, active)
 }
 
+/// `trace_pixel` for the block: one packet per sample position, each packet the block's
+/// pixels at the same point of their pixel (as coherent as the block itself), the lanes
+/// summing their samples in `trace_pixel`'s order.
 #[inline(always)]
 fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
-    let (rays, active) = camera_rays(g, i, j);
+    let half = 1.0f32 / (1.0 + 1.0);
+    if !g.spec.antialias {
+        return sample_packet(g, i, j, half, half);
+    }
+    let n = g.cam.samples;
+    let mut sum = [[0.0f32; 3]; LANES];
+    let mut t_near = [-1.0f32; LANES];
+    for sy in 0..n {
+        let dy = sample_offset::<f32>(sy, n);
+        for sx in 0..n {
+            let dx = sample_offset::<f32>(sx, n);
+            let s = sample_packet(g, i, j, dx, dy);
+            for l in 0..LANES {
+                for c in 0..3 {
+                    sum[l][c] += s[l][c];
+                }
+                if s[l][3] >= 0.0 && (t_near[l] < 0.0 || s[l][3] < t_near[l]) {
+                    t_near[l] = s[l][3];
+                }
+            }
+        }
+    }
+    let nn = (n * n) as f32;
+    std::array::from_fn(|l| [sum[l][0] / nn, sum[l][1] / nn, sum[l][2] / nn, t_near[l]])
+}
+
+/// `trace_sample` at the point (dx, dy) of each pixel of the block.
+#[inline(always)]
+fn sample_packet(g: &Globals<f32>, i: u32, j: u32, dx: f32, dy: f32) -> [[f32; 4]; LANES] {
+    let (rays, active) = camera_rays(g, i, j, dx, dy);
     let found = closest_hit_packet(g, &rays, active, 0.0, f32::MAX);
     let hits = &found.hits;
     let mut lit: Mask = 0;
@@ -898,6 +936,19 @@ fn shade_lanes(
         diffuse |= ((mats[l].model != MODEL_AMBIENT) as Mask) << l;
     }
     diffuse &= mask;
+    // `shading_at`, lane by lane through the mirror's own function: the shading normal
+    // `ns` and the shadow rays' start `ps` (`n` and `p` themselves for a flat hit).
+    let mut ns = n;
+    let mut ps = p;
+    if g.spec.smooth {
+        for l in 0..LANES {
+            let pl = V3::new(p[0][l], p[1][l], p[2][l]);
+            let nl = V3::new(n[0][l], n[1][l], n[2][l]);
+            let sh = shading_at(g, &hits[src(l)], pl, nl);
+            [ns[0][l], ns[1][l], ns[2][l]] = [sh.n.x, sh.n.y, sh.n.z];
+            [ps[0][l], ps[1][l], ps[2][l]] = [sh.p.x, sh.p.y, sh.p.z];
+        }
+    }
     if g.spec.uses_diffuse && diffuse != 0 {
         let mut to_eye = [[0.0f32; LANES]; 3];
         for l in 0..LANES {
@@ -920,7 +971,7 @@ fn shade_lanes(
             let mut ndl = [0.0f32; LANES];
             let mut on_flags = [false; LANES];
             for l in 0..LANES {
-                ndl[l] = dot_lane(&n, &lv, l);
+                ndl[l] = dot_lane(&ns, &lv, l);
                 on_flags[l] = ndl[l] > 0.0;
             }
             let mut on = mask_of(&on_flags) & diffuse;
@@ -929,7 +980,7 @@ fn shade_lanes(
                 let mut sd = [[0.0f32; LANES]; 3];
                 let mut skip = [PRIM_NONE; LANES];
                 for l in 0..LANES {
-                    let pl = V3::new(p[0][l], p[1][l], p[2][l]);
+                    let pl = V3::new(ps[0][l], ps[1][l], ps[2][l]);
                     let nl = V3::new(n[0][l], n[1][l], n[2][l]);
                     let o = shadow_origin(pl, nl);
                     let d = V3::from(position) - o;
@@ -955,9 +1006,9 @@ fn shade_lanes(
                 let two = 1.0f32 + 1.0;
                 let mut rv = [0.0f32; LANES];
                 for l in 0..LANES {
-                    let rx = n[0][l] * (two * ndl[l]) - lv[0][l];
-                    let ry = n[1][l] * (two * ndl[l]) - lv[1][l];
-                    let rz = n[2][l] * (two * ndl[l]) - lv[2][l];
+                    let rx = ns[0][l] * (two * ndl[l]) - lv[0][l];
+                    let ry = ns[1][l] * (two * ndl[l]) - lv[1][l];
+                    let rz = ns[2][l] * (two * ndl[l]) - lv[2][l];
                     rv[l] = max0(rx * v[0][l] + ry * v[1][l] + rz * v[2][l]);
                 }
                 let pw = phong_power_lanes(&rv, &mats, phong);

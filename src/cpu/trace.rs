@@ -11,8 +11,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::buffers::{
-    BvhNode, HitOut, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, RayIn, SceneBuffers,
-    Specialisation, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE,
+    BvhNode, FLAT, HitOut, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, RayIn,
+    SceneBuffers, Specialisation, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE,
     TRIANGLE_WATERTIGHT, Triangle,
 };
 use crate::cpu::real::{Real, V3};
@@ -39,6 +39,8 @@ pub struct Camera<R> {
     pub width: u32,
     /// Image height.
     pub height: u32,
+    /// Samples per pixel side.
+    pub samples: u32,
 }
 
 impl Camera<f32> {
@@ -53,6 +55,7 @@ impl Camera<f32> {
             aspect: p.aspect,
             width: p.width,
             height: p.height,
+            samples: p.samples,
         }
     }
 }
@@ -124,13 +127,13 @@ fn sign_nonneg<R: Real>(b: R) -> R {
 
 // ---- the camera ------------------------------------------------------------------------
 
-/// WGSL `camera_ray`: the primary ray through the centre of pixel (i, j).
-pub fn camera_ray<R: Real>(g: &Globals<R>, i: u32, j: u32) -> Ray<R> {
+/// WGSL `camera_ray`: the primary ray through the point (dx, dy) of pixel (i, j), each in
+/// [0, 1) from its top-left corner (the centre is (0.5, 0.5)).
+pub fn camera_ray<R: Real>(g: &Globals<R>, i: u32, j: u32, dx: R, dy: R) -> Ray<R> {
     let c = &g.cam;
-    let half = R::ONE / (R::ONE + R::ONE);
     let two = R::ONE + R::ONE;
-    let x = ((R::from_u32(i) + half) / R::from_u32(c.width) * two - R::ONE) * c.tan_half * c.aspect;
-    let y = (R::ONE - (R::from_u32(j) + half) / R::from_u32(c.height) * two) * c.tan_half;
+    let x = ((R::from_u32(i) + dx) / R::from_u32(c.width) * two - R::ONE) * c.tan_half * c.aspect;
+    let y = (R::ONE - (R::from_u32(j) + dy) / R::from_u32(c.height) * two) * c.tan_half;
     let dir = (c.forward + c.right * x + c.up * y).normalize();
     Ray { origin: c.eye, dir }
 }
@@ -772,6 +775,51 @@ pub fn hit_material<R: Real>(g: &Globals<R>, hit: &Hit<R>) -> u32 {
     g.buf.spheres[hit.prim as usize].material
 }
 
+/// WGSL `Shading`: the normal that lights a hit and the point its shadow rays leave.
+#[derive(Clone, Copy, Debug)]
+pub struct Shading<R> {
+    /// Unit shading normal, on the side of the facing geometric normal.
+    pub n: V3<R>,
+    /// Where shadow rays start (before `shadow_origin`'s offset).
+    pub p: V3<R>,
+}
+
+/// WGSL `shading_at`: `n` and `p` themselves, unless the hit triangle is smooth; then the
+/// interpolated vertex normal and Hanika's lifted point (see the WGSL doc comment).
+pub fn shading_at<R: Real>(g: &Globals<R>, hit: &Hit<R>, p: V3<R>, n: V3<R>) -> Shading<R> {
+    if !g.spec.smooth || (hit.prim & TRIANGLE_BIT) == 0 {
+        return Shading { n, p };
+    }
+    let tri = &g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize];
+    if tri.normals == FLAT {
+        return Shading { n, p };
+    }
+    let vn = &g.buf.normals[tri.normals as usize];
+    let (ta, tb, tc) = tri_vertices::<R>(tri);
+    let w = R::ONE - hit.u - hit.v;
+    let mut na = V3::<R>::from_f32(vn.na);
+    let mut nb = V3::<R>::from_f32(vn.nb);
+    let mut nc = V3::<R>::from_f32(vn.nc);
+    let mut mixed = na * w + nb * hit.u + nc * hit.v;
+    if mixed.dot(n) < R::ZERO {
+        na = -na;
+        nb = -nb;
+        nc = -nc;
+        mixed = -mixed;
+    }
+    if !(mixed.dot(mixed) > R::ZERO) {
+        return Shading { n, p }; // opposite vertex normals cancel: nothing to interpolate
+    }
+    let da = max0((ta - p).dot(na));
+    let db = max0((tb - p).dot(nb));
+    let dc = max0((tc - p).dot(nc));
+    let lifted = p + na * (w * da) + nb * (hit.u * db) + nc * (hit.v * dc);
+    Shading {
+        n: mixed.normalize(),
+        p: lifted,
+    }
+}
+
 /// WGSL `shadow_origin`: the offset origin of a shadow ray from `p` with facing normal `n`.
 pub fn shadow_origin<R: Real>(p: V3<R>, n: V3<R>) -> V3<R> {
     let scale = max2(max2(p.x.abs(), p.y.abs()), max2(p.z.abs(), R::ONE));
@@ -787,6 +835,7 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
     if n.dot(ray.dir) > R::ZERO {
         n = -n;
     }
+    let sh = shading_at(g, hit, p, n);
     let mut color = V3::from_f32(g.buf.params.ambient) * V3::from_f32(m.ka);
     if g.spec.uses_diffuse && m.model != MODEL_AMBIENT {
         // The reversed ray, as the shader has it (see there why not `origin - p`).
@@ -797,12 +846,12 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
             let light_color = V3::from_f32(light.color);
             let to_light = position - p;
             let l = to_light.normalize();
-            let ndl = n.dot(l);
+            let ndl = sh.n.dot(l);
             if !(ndl > R::ZERO) {
                 continue;
             }
             if g.spec.shadows {
-                let o = shadow_origin(p, n);
+                let o = shadow_origin(sh.p, n);
                 let d = position - o;
                 if occluded(g, Ray { origin: o, dir: d }, R::ZERO, R::ONE, hit.prim) {
                     continue;
@@ -811,7 +860,7 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
             color = color + light_color * V3::from_f32(m.kd) * ndl;
             if g.spec.uses_phong && m.model == MODEL_PHONG {
                 let two = R::ONE + R::ONE;
-                let r = n * (two * ndl) - l;
+                let r = sh.n * (two * ndl) - l;
                 let rv = max0(r.dot(v));
                 color = color + light_color * V3::from_f32(m.ks) * phong_power(rv, m);
             }
@@ -820,9 +869,10 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
     V3::new(clamp01(color.x), clamp01(color.y), clamp01(color.z))
 }
 
-/// WGSL `trace_pixel`: the colour of pixel (i, j) and, in w, the hit distance (−1 on a miss).
-pub fn trace_pixel<R: Real>(g: &Globals<R>, i: u32, j: u32) -> [R; 4] {
-    let ray = camera_ray(g, i, j);
+/// WGSL `trace_sample`: the colour through the point (dx, dy) of pixel (i, j) and, in w,
+/// the hit distance (−1 on a miss).
+pub fn trace_sample<R: Real>(g: &Globals<R>, i: u32, j: u32, dx: R, dy: R) -> [R; 4] {
+    let ray = camera_ray(g, i, j, dx, dy);
     let hit = closest_hit(g, ray, R::ZERO, R::INFINITY);
     if hit.prim == PRIM_NONE {
         let bg = V3::<R>::from_f32(g.buf.params.background);
@@ -830,6 +880,38 @@ pub fn trace_pixel<R: Real>(g: &Globals<R>, i: u32, j: u32) -> [R; 4] {
     }
     let c = shade(g, ray, &hit);
     [c.x, c.y, c.z, hit.t]
+}
+
+/// WGSL `sample_offset`: (s + 0.5) / n, the position of sample s of n along a
+/// pixel side.
+pub fn sample_offset<R: Real>(s: u32, n: u32) -> R {
+    (R::from_u32(s) + R::ONE / (R::ONE + R::ONE)) / R::from_u32(n)
+}
+
+/// WGSL `trace_pixel`: the colour of pixel (i, j) and, in w, the hit distance (−1 on a
+/// miss); with antialiasing the N×N samples, rows top to bottom, summed in that order and
+/// divided by N², w the nearest hit's t.
+pub fn trace_pixel<R: Real>(g: &Globals<R>, i: u32, j: u32) -> [R; 4] {
+    let half = R::ONE / (R::ONE + R::ONE);
+    if !g.spec.antialias {
+        return trace_sample(g, i, j, half, half);
+    }
+    let n = g.cam.samples;
+    let mut sum = V3::splat(R::ZERO);
+    let mut t_near = -R::ONE;
+    for sy in 0..n {
+        let dy = sample_offset::<R>(sy, n);
+        for sx in 0..n {
+            let dx = sample_offset::<R>(sx, n);
+            let s = trace_sample(g, i, j, dx, dy);
+            sum = sum + V3::new(s[0], s[1], s[2]);
+            if s[3] >= R::ZERO && (t_near < R::ZERO || s[3] < t_near) {
+                t_near = s[3];
+            }
+        }
+    }
+    let c = sum / V3::splat(R::from_u32(n * n));
+    [c.x, c.y, c.z, t_near]
 }
 
 // ---- entry points ------------------------------------------------------------------------

@@ -67,6 +67,9 @@ fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
 /// The scene's read-only storage bindings: spheres, triangles, materials, lights, BVH
 /// nodes, primitive ids (binding 0 is `params`).
 const SCENE_STORAGE: [u32; 6] = [1, 2, 3, 4, 8, 9];
+/// The smooth triangles' vertex normals: read by `shade` only, so bound for `render` only
+/// (the `query` entry point stays within eight storage buffers).
+const NORMALS_BINDING: u32 = 10;
 /// Every scene binding, in the order of `Kernel::scene_buffers`.
 const SCENE_BINDINGS: [u32; 7] = [0, 1, 2, 3, 4, 8, 9];
 
@@ -177,6 +180,7 @@ impl Kernel {
             });
             let mut render = scene_entries();
             render.push(storage_entry(5, false));
+            render.push(storage_entry(NORMALS_BINDING, true));
             let mut query = scene_entries();
             query.push(storage_entry(6, true));
             query.push(storage_entry(7, false));
@@ -327,25 +331,42 @@ impl Kernel {
         timings.compile = compile;
 
         let t0 = Instant::now();
-        let rows = tile_rows(device, width, height).min(max_rows.max(1));
+        // With N×N samples a pixel, a tile holds N² times fewer pixels, so that one dispatch
+        // stays about as long as without antialiasing and progress still moves.
+        let per_pixel = if spec.antialias {
+            (buf.params.samples as u64).pow(2).max(1)
+        } else {
+            1
+        };
+        let by_work = ((MAX_TILE_PIXELS / per_pixel) / width as u64).max(1) as u32;
+        let rows = tile_rows(device, width, height)
+            .min(by_work)
+            .min(max_rows.max(1));
         let tile_bytes = rows as u64 * width as u64 * 16;
         check_size(device, "one tile of the image", tile_bytes)?;
-        let (scene, output, staging) = scoped(device, "upload", || -> Result<_, GpuError> {
-            let scene = self.scene_buffers(device, buf)?;
-            let output = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("image"),
-                size: tile_bytes,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            let staging = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("readback"),
-                size: tile_bytes,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            Ok((scene, output, staging))
-        })??;
+        let (scene, normals, output, staging) =
+            scoped(device, "upload", || -> Result<_, GpuError> {
+                let scene = self.scene_buffers(device, buf)?;
+                let normals = storage_buffer(
+                    device,
+                    "vertex normals",
+                    &buf.normals,
+                    wgpu::BufferUsages::empty(),
+                )?;
+                let output = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("image"),
+                    size: tile_bytes,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let staging = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("readback"),
+                    size: tile_bytes,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                Ok((scene, normals, output, staging))
+            })??;
         let mut entries: Vec<wgpu::BindGroupEntry> = scene
             .iter()
             .enumerate()
@@ -357,6 +378,10 @@ impl Kernel {
         entries.push(wgpu::BindGroupEntry {
             binding: 5,
             resource: output.as_entire_binding(),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: NORMALS_BINDING,
+            resource: normals.as_entire_binding(),
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("render"),

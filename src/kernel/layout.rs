@@ -23,6 +23,12 @@ pub const TRIANGLE_MOLLER_TRUMBORE: u32 = 1;
 /// `TRIANGLE_ALGO` for the watertight test of Woop, Benthin and Wald.
 pub const TRIANGLE_WATERTIGHT: u32 = 2;
 
+/// `Triangle::normals` of a flat triangle (one shaded with its geometric normal). WGSL: `FLAT`.
+pub const FLAT: u32 = 0;
+
+/// The largest `samples` per pixel side (`[camera] samples`): 16×16 = 256 rays a pixel.
+pub const MAX_SAMPLES: u32 = 16;
+
 /// `Hit::prim` of a miss.
 pub const PRIM_NONE: u32 = 0xffff_ffff;
 /// Set in `Hit::prim` when the index is a triangle's (else it is a sphere's).
@@ -91,10 +97,11 @@ pub struct Params {
     pub tile_height: u32,
     /// Number of BVH nodes (0 for an empty scene). Offset 116.
     pub n_nodes: u32,
-    /// Offset 120.
-    pub _pad0: u32,
+    /// Samples per pixel side: N gives N×N rays per pixel, read only when the pipeline's
+    /// `ANTIALIAS` is on (N > 1); 1 is one ray through the pixel's centre. Offset 120.
+    pub samples: u32,
     /// Offset 124.
-    pub _pad1: u32,
+    pub _pad0: u32,
 }
 
 /// A sphere. Must match WGSL `struct Sphere` (32 bytes).
@@ -125,12 +132,33 @@ pub struct Triangle {
     pub material: u32,
     /// Second vertex. Offset 16.
     pub b: [f32; 3],
-    /// Offset 28.
-    pub _pad0: u32,
+    /// Index of its [`VertexNormals`] in the normals buffer, or [`FLAT`] (0: the buffer's
+    /// entry 0 is never used) for a triangle shaded with its geometric normal. Read only
+    /// when the pipeline's `SMOOTH` is on. Offset 28.
+    pub normals: u32,
     /// Third vertex. Offset 32.
     pub c: [f32; 3],
     /// Offset 44.
+    pub _pad0: u32,
+}
+
+/// The unit vertex normals of a smooth triangle, at a, b and c (the mesh's, transformed by
+/// the inverse transpose). Must match WGSL `struct VertexNormals` (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct VertexNormals {
+    /// Normal at a. Offset 0.
+    pub na: [f32; 3],
+    /// Offset 12.
+    pub _pad0: u32,
+    /// Normal at b. Offset 16.
+    pub nb: [f32; 3],
+    /// Offset 28.
     pub _pad1: u32,
+    /// Normal at c. Offset 32.
+    pub nc: [f32; 3],
+    /// Offset 44.
+    pub _pad2: u32,
 }
 
 /// A node of the flattened BVH (see [`crate::bvh`]). Must match WGSL `struct BvhNode`

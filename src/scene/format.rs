@@ -57,6 +57,8 @@ pub struct CameraFile {
     pub width: Spanned<i64>,
     /// Image height.
     pub height: Spanned<i64>,
+    /// Antialiasing: N gives N×N rays per pixel (default 1).
+    pub samples: Option<Spanned<i64>>,
 }
 
 /// `[[lights]]`.
@@ -121,4 +123,6 @@ pub struct MeshFile {
     pub rotate: Option<Vec3File>,
     /// Translation.
     pub translate: Option<Vec3File>,
+    /// Shade with interpolated vertex normals (the OBJ's `vn`, else computed).
+    pub smooth: Option<bool>,
 }

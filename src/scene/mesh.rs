@@ -5,7 +5,8 @@ use std::io::BufReader;
 use std::path::Path;
 
 use super::format::MeshFile;
-use super::{Material, Model, SceneError, Triangle, Validator, line_of};
+use super::obj::{NO_NORMAL, Normals, Parsed};
+use super::{Material, Model, SceneError, SmoothNormals, Triangle, Validator, line_of};
 
 /// Whether a triangle has zero area in f64 (collinear or coincident vertices).
 pub fn is_degenerate(v: &[[f32; 3]; 3]) -> bool {
@@ -48,6 +49,94 @@ impl Transform {
             .as_vec3()
             .to_array()
     }
+
+    /// A normal carried along: by the inverse transpose of the linear part, (R·S)⁻ᵀ =
+    /// R·S⁻¹, then normalised, in f64, rounded to f32 once. None when it is not finite
+    /// and nonzero (a zero scale component).
+    fn apply_normal(&self, n: [f32; 3]) -> Option<[f32; 3]> {
+        let n = glam::DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+        let m = self.rot * (n / self.scale);
+        let len = m.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return None;
+        }
+        Some((m / len).as_vec3().to_array())
+    }
+}
+
+/// The angle-weighted vertex normals of `triangles` (Thürmer and Wüthrich 1998): each
+/// triangle adds its unit normal times its angle at the vertex. Weighting by angle makes
+/// the normal a property of the surface, not of how it was cut into triangles: splitting a
+/// face into more triangles around a vertex changes area and count weights but not the
+/// angles it covers. In f64, unnormalised; zero where no triangle with area touches.
+fn angle_weighted(vertices: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<glam::DVec3> {
+    let mut acc = vec![glam::DVec3::ZERO; vertices.len()];
+    let v = |k: u32| {
+        let p = vertices[k as usize];
+        glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+    };
+    let angle = |a: glam::DVec3, b: glam::DVec3| a.cross(b).length().atan2(a.dot(b));
+    for t in triangles {
+        let [p0, p1, p2] = t.map(v);
+        let n = (p1 - p0).cross(p2 - p0);
+        let len = n.length();
+        if !(len > 0.0 && len.is_finite()) {
+            continue;
+        }
+        let nf = n / len;
+        acc[t[0] as usize] += nf * angle(p1 - p0, p2 - p0);
+        acc[t[1] as usize] += nf * angle(p2 - p1, p0 - p1);
+        acc[t[2] as usize] += nf * angle(p0 - p2, p1 - p2);
+    }
+    acc
+}
+
+/// The unit normal at each corner of each of `parsed`'s triangles, in world space: the
+/// OBJ's `vn` where the face names one, else the angle-weighted vertex normal (the
+/// triangle's own normal where that is zero), each rounded to f32 as a file would hold
+/// it, then carried by the transform. A mesh without `vn` thus gets exactly the normals of
+/// the same mesh with its computed normals written out as `vn`.
+fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>, String> {
+    use rayon::prelude::*;
+    let needs_computed = parsed.normal_ix.iter().flatten().any(|&k| k == NO_NORMAL);
+    let acc = if needs_computed {
+        angle_weighted(&parsed.vertices, &parsed.triangles)
+    } else {
+        Vec::new()
+    };
+    let unit_f32 = |n: glam::DVec3| -> Option<[f32; 3]> {
+        let len = n.length();
+        (len > 0.0 && len.is_finite()).then(|| (n / len).as_vec3().to_array())
+    };
+    parsed
+        .triangles
+        .par_iter()
+        .zip(&parsed.normal_ix)
+        .enumerate()
+        .map(|(f, (tri, nix))| {
+            let mut out = [[0.0f32; 3]; 3];
+            for c in 0..3 {
+                let object = if nix[c] != NO_NORMAL {
+                    parsed.normals[nix[c] as usize]
+                } else {
+                    let own = || {
+                        let [p0, p1, p2] = tri.map(|k| {
+                            let p = parsed.vertices[k as usize];
+                            glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+                        });
+                        unit_f32((p1 - p0).cross(p2 - p0))
+                    };
+                    unit_f32(acc[tri[c] as usize])
+                        .or_else(own)
+                        .unwrap_or([0.0, 0.0, 1.0]) // zero area: never hit
+                };
+                out[c] = xf.apply_normal(object).ok_or_else(|| {
+                    format!("face {f}: its normal does not survive the transform (a zero scale component?)")
+                })?;
+            }
+            Ok(out)
+        })
+        .collect()
 }
 
 /// Loads mesh entry `i` into `triangles` (and its MTL materials into `materials`).
@@ -57,9 +146,15 @@ pub(super) fn load(
     m: &MeshFile,
     materials: &mut Vec<Material>,
     triangles: &mut Vec<Triangle>,
+    smooth: &mut Vec<SmoothNormals>,
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
     let key = format!("meshes[{i}].file");
+    let normals = if m.smooth == Some(true) {
+        Normals::Read
+    } else {
+        Normals::Skip
+    };
     let line = line_of(v.src, m.file.span().start);
     let base = v.path.parent().unwrap_or(Path::new("."));
     let obj_path = base.join(m.file.get_ref());
@@ -92,7 +187,7 @@ pub(super) fn load(
     // positions and faces (tobj otherwise).
     if let Some(name) = &m.material {
         let t = std::time::Instant::now();
-        let parsed = super::obj::parse(text).map_err(&fail)?;
+        let parsed = super::obj::parse(text, normals).map_err(&fail)?;
         crate::stages::record("OBJ parse", t.elapsed());
         if let Some(parsed) = parsed {
             drop(bytes); // the text is parsed: free it before the triangles are placed
@@ -127,12 +222,21 @@ pub(super) fn load(
                     .collect::<Result<_, _>>()?
             };
             crate::stages::record("transform", t.elapsed());
+            if normals == Normals::Read {
+                let t = std::time::Instant::now();
+                smooth.push(SmoothNormals {
+                    first: triangles.len(),
+                    normals: corner_normals(&parsed, &xf).map_err(&fail)?,
+                });
+                crate::stages::record("normals", t.elapsed());
+            }
             let before = triangles.len();
             triangles.extend(placed);
             return finish(v, line, &key, &triangles[before..], &fail, warnings);
         }
     }
-    let short_faces = super::obj::check(text).map_err(&fail)?;
+    let checked = super::obj::check(text, normals).map_err(&fail)?;
+    let short_faces = &checked.short_faces;
     crate::stages::record("OBJ check", t_check.elapsed());
     if let Some(first) = short_faces.first() {
         warnings.push(format!(
@@ -271,6 +375,23 @@ pub(super) fn load(
         }
     }
     crate::stages::record("transform", t_xf.elapsed());
+    if normals == Normals::Read {
+        // glint's reader gives tobj's triangles in tobj's order (tested in `obj`), so the
+        // corner normals line up with the triangles just placed.
+        if checked.triangles.len() != triangles.len() - before {
+            return Err(fail(format!(
+                "smooth: the OBJ reader found {} triangles where tobj found {}; cannot pair normals with faces",
+                checked.triangles.len(),
+                triangles.len() - before
+            )));
+        }
+        let t = std::time::Instant::now();
+        smooth.push(SmoothNormals {
+            first: before,
+            normals: corner_normals(&checked, &xf).map_err(&fail)?,
+        });
+        crate::stages::record("normals", t.elapsed());
+    }
     finish(v, line, &key, &triangles[before..], &fail, warnings)
 }
 

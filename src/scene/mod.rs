@@ -17,6 +17,9 @@ use toml::Spanned;
 /// The largest width or height accepted (the GPU renders larger frames in tiles).
 pub const MAX_IMAGE_SIDE: i64 = 32_768;
 
+/// The largest `[camera] samples` (per pixel side): the contract's [`crate::kernel::layout::MAX_SAMPLES`].
+pub const MAX_SAMPLES: u32 = crate::kernel::layout::MAX_SAMPLES;
+
 /// Ray/triangle intersection algorithm.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TriangleAlgorithm {
@@ -101,6 +104,9 @@ pub struct Camera {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// Samples per pixel side, 1..=`MAX_SAMPLES`: N×N rays per pixel on a fixed grid, their
+    /// colours averaged (1: one ray through the centre).
+    pub samples: u32,
 }
 
 /// A point light.
@@ -149,6 +155,15 @@ pub struct Triangle {
     pub material: u32,
 }
 
+/// The vertex normals of one smooth mesh's triangles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SmoothNormals {
+    /// Index in `Scene::triangles` of the mesh's first triangle.
+    pub first: usize,
+    /// Unit normals at a, b and c of each of the mesh's triangles, in order.
+    pub normals: Vec<[[f32; 3]; 3]>,
+}
+
 /// A loaded, validated scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -172,6 +187,8 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     /// Triangles: the file's, then each mesh's.
     pub triangles: Vec<Triangle>,
+    /// The vertex normals of the meshes marked `smooth`, in mesh order.
+    pub smooth: Vec<SmoothNormals>,
     /// Things that are allowed but probably not meant (zero-area triangles, ...), each
     /// naming file, line and key.
     pub warnings: Vec<String>,
@@ -562,6 +579,7 @@ impl Validator<'_> {
             });
         }
 
+        let mut smooth = Vec::new();
         for (i, m) in f.meshes.iter().enumerate() {
             triangle_sources.push((
                 triangles.len(),
@@ -578,6 +596,7 @@ impl Validator<'_> {
                 m.get_ref(),
                 &mut materials,
                 &mut triangles,
+                &mut smooth,
                 &mut warnings,
             )?;
         }
@@ -593,6 +612,7 @@ impl Validator<'_> {
             materials,
             spheres,
             triangles,
+            smooth,
             warnings,
             sphere_sources,
             triangle_sources,
@@ -629,6 +649,22 @@ impl Validator<'_> {
         };
         let width = side(&c.width, "camera.width")?;
         let height = side(&c.height, "camera.height")?;
+        let samples = match &c.samples {
+            None => 1,
+            Some(v) => {
+                let n = *v.get_ref();
+                if !(1..=MAX_SAMPLES as i64).contains(&n) {
+                    return self.err(
+                        v.span(),
+                        "camera.samples",
+                        format!(
+                            "{n} must be in 1..={MAX_SAMPLES} (N×N rays per pixel; 1 is one ray through the centre)"
+                        ),
+                    );
+                }
+                n as u32
+            }
+        };
         // The basis in f64: the view must have a length and up must not be parallel to it.
         let d = [
             look_at[0] as f64 - eye[0] as f64,
@@ -666,6 +702,7 @@ impl Validator<'_> {
             fov,
             width,
             height,
+            samples,
         })
     }
 

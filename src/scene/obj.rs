@@ -17,35 +17,60 @@ pub struct Parsed {
     pub triangles: Vec<[u32; 3]>,
     /// 1-based lines of faces with fewer than three vertices.
     pub short_faces: Vec<usize>,
+    /// The normals (`vn`), in file order, each finite and of nonzero length; read only when
+    /// asked for (else empty).
+    pub normals: Vec<[f32; 3]>,
+    /// Per triangle, each corner's index into `normals`, or [`NO_NORMAL`] where the face
+    /// gives none; empty when normals were not asked for.
+    pub normal_ix: Vec<[u32; 3]>,
 }
 
-/// A chunk's result: its vertices, and each triangle's raw indices with the number of
-/// vertices the chunk had defined before it and its line within the chunk.
+/// `Parsed::normal_ix` of a corner without a `vn` index.
+pub const NO_NORMAL: u32 = u32::MAX;
+
+/// Whether a reader takes the normals (`vn` and the faces' third indices): only a smooth
+/// mesh needs them, and only then are they checked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Normals {
+    /// Skip them, as a flat mesh does.
+    Skip,
+    /// Read and check them.
+    Read,
+}
+
+/// One triangle of a chunk: raw position indices, the positions the chunk defined before
+/// it, its line within the chunk, raw normal indices (0: none) and the normals before it.
+type RawFace = ([i64; 3], u32, u32, [i64; 3], u32);
+
+/// A chunk's result: its vertices (and normals), and its triangles.
 #[derive(Default)]
 struct Chunk {
     vertices: Vec<[f32; 3]>,
-    faces: Vec<([i64; 3], u32, u32)>,
+    normals: Vec<[f32; 3]>,
+    faces: Vec<RawFace>,
     short_faces: Vec<u32>,
     lines: u32,
 }
 
 /// Parses `text`: `Ok(None)` when it needs tobj (materials or statements this reader does
-/// not know), `Err` with the line for a malformed position or face.
-pub fn parse(text: &str) -> Result<Option<Parsed>, String> {
-    parse_with(text, true)
+/// not know), `Err` with the line for a malformed position, normal or face.
+pub fn parse(text: &str, normals: Normals) -> Result<Option<Parsed>, String> {
+    parse_with(text, true, normals)
 }
 
 /// Checks an OBJ that tobj will read (one with materials or other statements): the same
-/// errors, with their lines, as [`parse`] gives, for positions and faces; statements this
-/// reader does not know are skipped. Returns the lines of faces with fewer than three
-/// vertices, which tobj drops in silence.
-pub fn check(text: &str) -> Result<Vec<usize>, String> {
-    Ok(parse_with(text, false)?.map_or_else(Vec::new, |p| p.short_faces))
+/// errors, with their lines, as [`parse`] gives, for positions, normals and faces;
+/// statements this reader does not know are skipped. Returns what [`parse`] would, its
+/// triangles in tobj's order (file order, polygons fanned from their first vertex), and
+/// with `short_faces` the lines of faces with fewer than three vertices, which tobj drops
+/// in silence.
+pub fn check(text: &str, normals: Normals) -> Result<Parsed, String> {
+    Ok(parse_with(text, false, normals)?.expect("a lenient parse always finishes"))
 }
 
 /// [`parse`]; with `strict` false, unknown statements are skipped instead of handing the
 /// file to tobj.
-fn parse_with(text: &str, strict: bool) -> Result<Option<Parsed>, String> {
+fn parse_with(text: &str, strict: bool, normals: Normals) -> Result<Option<Parsed>, String> {
     let bytes = text.as_bytes();
     let pieces = rayon::current_num_threads().max(1) * 4;
     let mut cuts = vec![0usize];
@@ -63,17 +88,18 @@ fn parse_with(text: &str, strict: bool) -> Result<Option<Parsed>, String> {
     cuts.push(bytes.len());
     let chunks: Vec<Result<Option<Chunk>, (u32, String)>> = cuts
         .par_windows(2)
-        .map(|w| parse_chunk(&text[w[0]..w[1]], strict))
+        .map(|w| parse_chunk(&text[w[0]..w[1]], strict, normals))
         .collect();
     // Line and vertex offsets of each chunk; the first error in file order wins.
     let mut done = Vec::with_capacity(chunks.len());
-    let (mut line0, mut v0) = (0u32, 0usize);
+    let (mut line0, mut v0, mut n0) = (0u32, 0usize, 0usize);
     for c in chunks {
         match c {
             Ok(Some(c)) => {
-                let offsets = (line0, v0);
+                let offsets = (line0, v0, n0);
                 line0 += c.lines;
                 v0 += c.vertices.len();
+                n0 += c.normals.len();
                 done.push((c, offsets));
             }
             Ok(None) => return Ok(None),
@@ -84,22 +110,44 @@ fn parse_with(text: &str, strict: bool) -> Result<Option<Parsed>, String> {
         .iter()
         .flat_map(|(c, _)| c.vertices.iter().copied())
         .collect();
-    let resolve = |(ix, before, line): &([i64; 3], u32, u32), (l0, v0): (u32, usize)| {
+    let all_normals: Vec<[f32; 3]> = done
+        .iter()
+        .flat_map(|(c, _)| c.normals.iter().copied())
+        .collect();
+    // An OBJ index (1-based, or negative: relative to the end) among `defined` items.
+    let index = |i: i64, defined: i64| -> Option<u32> {
+        let k = if i > 0 { i - 1 } else { defined + i };
+        (i != 0 && k >= 0 && k < defined).then_some(k as u32)
+    };
+    let resolve = |(ix, before, line, nix, nbefore): &RawFace,
+                   (l0, v0, n0): (u32, usize, usize)| {
         let defined = v0 as i64 + *before as i64;
         let mut out = [0u32; 3];
         for (slot, &i) in out.iter_mut().zip(ix) {
-            let k = if i > 0 { i - 1 } else { defined + i };
-            if i == 0 || k < 0 || k >= defined {
-                return Err(format!(
+            *slot = index(i, defined).ok_or_else(|| {
+                format!(
                     "line {}: face vertex index {i} is out of range ({defined} vertices defined before it)",
                     l0 + line
-                ));
-            }
-            *slot = k as u32;
+                )
+            })?;
         }
-        Ok(out)
+        let n_defined = n0 as i64 + *nbefore as i64;
+        let mut nout = [NO_NORMAL; 3];
+        if normals == Normals::Read {
+            for (slot, &i) in nout.iter_mut().zip(nix) {
+                if i != 0 {
+                    *slot = index(i, n_defined).ok_or_else(|| {
+                        format!(
+                            "line {}: face normal index {i} is out of range ({n_defined} normals (`vn`) defined before it)",
+                            l0 + line
+                        )
+                    })?;
+                }
+            }
+        }
+        Ok((out, nout))
     };
-    let triangles = done
+    let resolved = done
         .par_iter()
         .map(|(c, off)| {
             c.faces
@@ -109,21 +157,28 @@ fn parse_with(text: &str, strict: bool) -> Result<Option<Parsed>, String> {
         })
         .collect::<Result<Vec<Vec<_>>, String>>()?
         .concat();
+    let (triangles, normal_ix): (Vec<[u32; 3]>, Vec<[u32; 3]>) = match normals {
+        Normals::Read => resolved.into_iter().unzip(),
+        Normals::Skip => (resolved.into_iter().map(|(t, _)| t).collect(), Vec::new()),
+    };
     let short_faces = done
         .iter()
-        .flat_map(|(c, (l0, _))| c.short_faces.iter().map(move |l| (l0 + l) as usize))
+        .flat_map(|(c, (l0, _, _))| c.short_faces.iter().map(move |l| (l0 + l) as usize))
         .collect();
     Ok(Some(Parsed {
         vertices,
         triangles,
         short_faces,
+        normals: all_normals,
+        normal_ix,
     }))
 }
 
 /// One chunk of whole lines. Lines are counted from 1 within the chunk.
-fn parse_chunk(text: &str, strict: bool) -> Result<Option<Chunk>, (u32, String)> {
+fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chunk>, (u32, String)> {
     let mut c = Chunk::default();
     let mut face: Vec<i64> = Vec::with_capacity(8);
+    let mut face_n: Vec<i64> = Vec::with_capacity(8);
     for line in text.split('\n') {
         c.lines += 1;
         let mut words = line.split_ascii_whitespace();
@@ -144,23 +199,69 @@ fn parse_chunk(text: &str, strict: bool) -> Result<Option<Chunk>, (u32, String)>
                 }
                 c.vertices.push(p);
             }
+            "vn" if normals == Normals::Read => {
+                let mut n = [0.0f32; 3];
+                for slot in n.iter_mut() {
+                    match words.next().map(str::parse::<f32>) {
+                        Some(Ok(x)) if x.is_finite() => *slot = x,
+                        _ => {
+                            return Err((
+                                c.lines,
+                                format!(
+                                    "a normal (`vn`) needs three finite numbers: {:?}",
+                                    trunc(line)
+                                ),
+                            ));
+                        }
+                    }
+                }
+                let len2 = n.iter().map(|&x| x as f64 * x as f64).sum::<f64>();
+                if len2 <= 0.0 {
+                    return Err((
+                        c.lines,
+                        format!("a normal (`vn`) has zero length: {:?}", trunc(line)),
+                    ));
+                }
+                c.normals.push(n);
+            }
             "f" => {
                 face.clear();
+                face_n.clear();
                 for w in words {
-                    let first = w.split('/').next().unwrap_or("");
+                    let mut parts = w.split('/');
+                    let first = parts.next().unwrap_or("");
                     let ix: i64 = first
                         .parse()
                         .map_err(|_| (c.lines, format!("face vertex {w:?} is not an index")))?;
                     face.push(ix);
+                    if normals == Normals::Read {
+                        let n = match parts.nth(1) {
+                            None | Some("") => 0,
+                            Some(n) => n.parse().map_err(|_| {
+                                (
+                                    c.lines,
+                                    format!("face normal index in {w:?} is not an index"),
+                                )
+                            })?,
+                        };
+                        face_n.push(n);
+                    }
                 }
                 if face.len() < 3 {
                     c.short_faces.push(c.lines);
                     continue;
                 }
                 let before = c.vertices.len() as u32;
+                let n_before = c.normals.len() as u32;
+                let nix = |k: usize| face_n.get(k).copied().unwrap_or(0);
                 for k in 2..face.len() {
-                    c.faces
-                        .push(([face[0], face[k - 1], face[k]], before, c.lines));
+                    c.faces.push((
+                        [face[0], face[k - 1], face[k]],
+                        before,
+                        c.lines,
+                        [nix(0), nix(k - 1), nix(k)],
+                        n_before,
+                    ));
                 }
             }
             "vn" | "vt" | "o" | "g" | "s" => {}
@@ -214,7 +315,9 @@ mod tests {
     }
 
     fn same_as_tobj(text: &str) {
-        let p = parse(text).unwrap().expect("the fast path takes it");
+        let p = parse(text, Normals::Skip)
+            .unwrap()
+            .expect("the fast path takes it");
         let ours: Vec<[[f32; 3]; 3]> = p
             .triangles
             .iter()
@@ -248,29 +351,83 @@ mod tests {
 
     #[test]
     fn what_it_does_not_take_goes_to_tobj_and_errors_name_lines() {
-        assert!(parse("mtllib a.mtl\nv 0 0 0\n").unwrap().is_none());
-        assert!(parse("v 0 0 0\nusemtl x\n").unwrap().is_none());
-        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap_err();
+        assert!(
+            parse("mtllib a.mtl\nv 0 0 0\n", Normals::Skip)
+                .unwrap()
+                .is_none()
+        );
+        assert!(
+            parse("v 0 0 0\nusemtl x\n", Normals::Skip)
+                .unwrap()
+                .is_none()
+        );
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", Normals::Skip).unwrap_err();
         assert!(
             e.starts_with("line 4: face vertex index 4 is out of range"),
             "{e}"
         );
-        let e = parse("v 0 0 0\nv 1 nope 0\n").unwrap_err();
+        let e = parse("v 0 0 0\nv 1 nope 0\n", Normals::Skip).unwrap_err();
         assert!(e.starts_with("line 2: a vertex"), "{e}");
         // What tobj reads is checked the same way, its other statements skipped.
-        let e = check("mtllib a.mtl\nv 0 0 0\nv 1 0 0\nusemtl x\nv 0 1 0\nf 1 2 5\n").unwrap_err();
+        let e = check(
+            "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nusemtl x\nv 0 1 0\nf 1 2 5\n",
+            Normals::Skip,
+        )
+        .unwrap_err();
         assert!(
             e.starts_with("line 6: face vertex index 5 is out of range"),
             "{e}"
         );
         assert_eq!(
-            check("mtllib a.mtl\nv 0 0 0\nv 1 0 0\nf 1 2\n").unwrap(),
+            check("mtllib a.mtl\nv 0 0 0\nv 1 0 0\nf 1 2\n", Normals::Skip)
+                .unwrap()
+                .short_faces,
             vec![4]
         );
-        let p = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\nf 1 2 3\n")
+        let p = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\nf 1 2 3\n", Normals::Skip)
             .unwrap()
             .unwrap();
         assert_eq!((p.triangles.len(), p.short_faces), (1, vec![4]));
+    }
+
+    #[test]
+    fn normals_are_read_checked_and_indexed_per_corner() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nvn 0 0.6 0.8\n\
+                    f 1//1 2//2 3//1 4//2\nf 1 2 3\nf 1/1/-1 2/1/1 3/1/2\n";
+        let p = parse(text, Normals::Read).unwrap().unwrap();
+        assert_eq!(p.normals, vec![[0.0, 0.0, 1.0], [0.0, 0.6, 0.8]]);
+        assert_eq!(
+            p.normal_ix,
+            vec![[0, 1, 0], [0, 0, 1], [NO_NORMAL; 3], [1, 0, 1]]
+        );
+        assert!(
+            parse(text, Normals::Skip)
+                .unwrap()
+                .unwrap()
+                .normals
+                .is_empty()
+        );
+        let e = parse("v 0 0 0\nvn 0 0 0\n", Normals::Read).unwrap_err();
+        assert!(
+            e.starts_with("line 2: a normal (`vn`) has zero length"),
+            "{e}"
+        );
+        let e = parse("v 0 0 0\nvn 0 nan 1\n", Normals::Read).unwrap_err();
+        assert!(
+            e.starts_with("line 2: a normal (`vn`) needs three finite"),
+            "{e}"
+        );
+        let e = parse(
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//2\n",
+            Normals::Read,
+        )
+        .unwrap_err();
+        assert!(
+            e.starts_with("line 5: face normal index 2 is out of range (1 normals"),
+            "{e}"
+        );
+        // A flat mesh's normals are not looked at: today's files keep loading.
+        assert!(parse("v 0 0 0\nvn 0 0 0\n", Normals::Skip).is_ok());
     }
 
     #[test]
@@ -281,7 +438,7 @@ mod tests {
             s += &format!("v {k} 0 0\nv {k} 1 0\nv {k} 0 1\nf -3 -2 -1\n");
         }
         s += "f 1 2 999999\n";
-        let e = parse(&s).unwrap_err();
+        let e = parse(&s, Normals::Skip).unwrap_err();
         assert!(e.starts_with("line 80001: "), "{e}");
         let ok = &s[..s.len() - "f 1 2 999999\n".len()];
         same_as_tobj(ok);

@@ -426,7 +426,7 @@ pub fn pixel_dirs(scene: &Scene, pixels: &[(u32, u32)]) -> Vec<[f32; 3]> {
     };
     pixels
         .iter()
-        .map(|&(i, j)| glint::cpu::trace::camera_ray(&g, i, j).dir.into())
+        .map(|&(i, j)| glint::cpu::trace::camera_ray(&g, i, j, 0.5, 0.5).dir.into())
         .collect()
 }
 
