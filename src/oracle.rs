@@ -156,3 +156,84 @@ pub fn closest_hit(buf: &SceneBuffers, ray: &RayIn) -> Option<(f64, u32)> {
     }
     best
 }
+
+/// A unit icosphere as OBJ text: the icosahedron, each triangle split in four `k` times,
+/// every new vertex pushed out onto the sphere (shared, so the mesh is closed), positions
+/// rounded to f32 and written so that they read back exactly; faces wound outward. For
+/// measuring smooth against flat shading against the analytic sphere.
+pub fn icosphere_obj(k: u32) -> String {
+    use std::collections::HashMap;
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut v: Vec<[f64; 3]> = [
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
+    ]
+    .to_vec();
+    let unit = |p: [f64; 3]| {
+        let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        [p[0] / l, p[1] / l, p[2] / l]
+    };
+    for p in v.iter_mut() {
+        *p = unit(*p);
+    }
+    let mut f: Vec<[usize; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..k {
+        let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut next = Vec::with_capacity(f.len() * 4);
+        for [a, b, c] in f {
+            let mut m = |i: usize, j: usize| {
+                *mid.entry((i.min(j), i.max(j))).or_insert_with(|| {
+                    let (p, q) = (v[i], v[j]);
+                    v.push(unit([
+                        (p[0] + q[0]) / 2.0,
+                        (p[1] + q[1]) / 2.0,
+                        (p[2] + q[2]) / 2.0,
+                    ]));
+                    v.len() - 1
+                })
+            };
+            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        f = next;
+    }
+    let mut s = format!("# unit icosphere, {k} subdivisions, {} faces\n", f.len());
+    for p in &v {
+        s += &format!("v {} {} {}\n", p[0] as f32, p[1] as f32, p[2] as f32);
+    }
+    for [a, b, c] in &f {
+        s += &format!("f {} {} {}\n", a + 1, b + 1, c + 1);
+    }
+    s
+}
