@@ -278,10 +278,11 @@ fn interpolated_normals_at_the_vertices_are_the_vertex_normals() {
     assert!(checked > 1000, "{checked}");
 }
 
-/// The test's own angle-weighted vertex normals (Thürmer and Wüthrich): each triangle adds
-/// its unit normal times its angle at the vertex, in f64, then each is normalised and
-/// rounded to f32. With `area` the triangle's doubled area weighs instead of the angle.
-fn vertex_normals(obj: &str, area: bool) -> (Vec<[f32; 3]>, Vec<[usize; 3]>) {
+/// The test's own vertex normals, as the docs describe them: area-weighted (Gouraud: each
+/// triangle adds its unnormalised cross product), in f64, then each normalised and rounded
+/// to f32. With `angle`, each triangle adds its unit normal times its angle at the vertex
+/// (Thürmer and Wüthrich) instead: the twin.
+fn vertex_normals(obj: &str, angle: bool) -> (Vec<[f32; 3]>, Vec<[usize; 3]>) {
     let mut v: Vec<[f64; 3]> = Vec::new();
     let mut f: Vec<[usize; 3]> = Vec::new();
     for line in obj.lines() {
@@ -303,35 +304,35 @@ fn vertex_normals(obj: &str, area: bool) -> (Vec<[f32; 3]>, Vec<[usize; 3]>) {
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let cross = |a: [f64; 3], b: [f64; 3]| {
         [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
+            a[1] * b[2] - b[1] * a[2],
+            a[2] * b[0] - b[2] * a[0],
+            a[0] * b[1] - b[0] * a[1],
         ]
     };
     let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let len = |a: [f64; 3]| dot(a, a).sqrt();
-    let angle = |a: [f64; 3], b: [f64; 3]| len(cross(a, b)).atan2(dot(a, b));
+    let corner = |a: [f64; 3], b: [f64; 3]| len(cross(a, b)).atan2(dot(a, b));
     let mut acc = vec![[0.0f64; 3]; v.len()];
     for t in &f {
         let [p0, p1, p2] = t.map(|k| v[k]);
         let n = cross(sub(p1, p0), sub(p2, p0));
         let l = len(n);
-        if l == 0.0 {
-            continue;
-        }
-        let nf = [n[0] / l, n[1] / l, n[2] / l];
-        let w = if area {
-            [l; 3]
-        } else {
-            [
-                angle(sub(p1, p0), sub(p2, p0)),
-                angle(sub(p2, p1), sub(p0, p1)),
-                angle(sub(p0, p2), sub(p1, p2)),
-            ]
-        };
         for c in 0..3 {
+            let add = if angle {
+                if l == 0.0 {
+                    continue;
+                }
+                let w = [
+                    corner(sub(p1, p0), sub(p2, p0)),
+                    corner(sub(p2, p1), sub(p0, p1)),
+                    corner(sub(p0, p2), sub(p1, p2)),
+                ][c];
+                [n[0] / l * w, n[1] / l * w, n[2] / l * w]
+            } else {
+                n
+            };
             for i in 0..3 {
-                acc[t[c]][i] += nf[i] * w[c];
+                acc[t[c]][i] += add[i];
             }
         }
     }
@@ -370,9 +371,9 @@ fn with_vn(obj: &str, normals: &[[f32; 3]], faces: &[[usize; 3]]) -> String {
     s
 }
 
-/// A mesh without `vn` gets exactly the normals of the same mesh with its angle-weighted
+/// A mesh without `vn` gets exactly the normals of the same mesh with its area-weighted
 /// normals written out as `vn`, under a transform that scales unevenly; the twin writes
-/// area-weighted normals and gets different ones, so the equality is about the weighting.
+/// angle-weighted normals and gets different ones, so the equality is about the weighting.
 #[test]
 fn computed_normals_equal_the_same_normals_written_out() {
     let dir = temp_dir("vn");
@@ -391,10 +392,10 @@ fn computed_normals_equal_the_same_normals_written_out() {
         let written = load(&dir, &with_vn(&obj, &n, &faces), &o);
         assert_eq!(computed.triangles, written.triangles, "{name}");
         assert_eq!(computed.smooth, written.smooth, "{name}");
-        let (n_area, _) = vertex_normals(&obj, true);
-        let area = load(&dir, &with_vn(&obj, &n_area, &faces), &o);
+        let (n_angle, _) = vertex_normals(&obj, true);
+        let angle = load(&dir, &with_vn(&obj, &n_angle, &faces), &o);
         if name == "suzanne" {
-            assert_ne!(computed.smooth, area.smooth, "{name}: the twin");
+            assert_ne!(computed.smooth, angle.smooth, "{name}: the twin");
         }
         // The transform carried them: unit length, and not the file's.
         for tri in &written.smooth[0].normals {

@@ -64,35 +64,35 @@ impl Transform {
     }
 }
 
-/// The angle-weighted vertex normals of `triangles` (Thürmer and Wüthrich 1998): each
-/// triangle adds its unit normal times its angle at the vertex. Weighting by angle makes
-/// the normal a property of the surface, not of how it was cut into triangles: splitting a
-/// face into more triangles around a vertex changes area and count weights but not the
-/// angles it covers. In f64, unnormalised; zero where no triangle with area touches.
-fn angle_weighted(vertices: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<glam::DVec3> {
+/// The area-weighted vertex normals of `triangles` (Gouraud's): each triangle adds its
+/// normal scaled by its area (the unnormalised cross product), in f64, unnormalised; zero
+/// where no triangle with area touches. Why area and not angle (Thürmer and Wüthrich):
+/// scanned meshes hold folded slivers, and a sliver whose angle at a vertex is near 180°
+/// carries a full π of angle weight with the tilted normal of its fold, while its area is
+/// nearly nothing. With angle weights the dragon showed dark specks where such vertices
+/// bent the normals of every triangle around them by 30–40°; area weights remove them
+/// (and on a regular mesh such as the icosphere the two agree closely).
+fn area_weighted(vertices: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<glam::DVec3> {
     let mut acc = vec![glam::DVec3::ZERO; vertices.len()];
     let v = |k: u32| {
         let p = vertices[k as usize];
         glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
     };
-    let angle = |a: glam::DVec3, b: glam::DVec3| a.cross(b).length().atan2(a.dot(b));
     for t in triangles {
         let [p0, p1, p2] = t.map(v);
         let n = (p1 - p0).cross(p2 - p0);
-        let len = n.length();
-        if !(len > 0.0 && len.is_finite()) {
+        if !n.is_finite() {
             continue;
         }
-        let nf = n / len;
-        acc[t[0] as usize] += nf * angle(p1 - p0, p2 - p0);
-        acc[t[1] as usize] += nf * angle(p2 - p1, p0 - p1);
-        acc[t[2] as usize] += nf * angle(p0 - p2, p1 - p2);
+        for &k in t {
+            acc[k as usize] += n;
+        }
     }
     acc
 }
 
 /// The unit normal at each corner of each of `parsed`'s triangles, in world space: the
-/// OBJ's `vn` where the face names one, else the angle-weighted vertex normal (the
+/// OBJ's `vn` where the face names one, else the area-weighted vertex normal (the
 /// triangle's own normal where that is zero), each rounded to f32 as a file would hold
 /// it, then carried by the transform. A mesh without `vn` thus gets exactly the normals of
 /// the same mesh with its computed normals written out as `vn`.
@@ -100,7 +100,7 @@ fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>,
     use rayon::prelude::*;
     let needs_computed = parsed.normal_ix.iter().flatten().any(|&k| k == NO_NORMAL);
     let acc = if needs_computed {
-        angle_weighted(&parsed.vertices, &parsed.triangles)
+        area_weighted(&parsed.vertices, &parsed.triangles)
     } else {
         Vec::new()
     };
@@ -119,15 +119,12 @@ fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>,
                 let object = if nix[c] != NO_NORMAL {
                     parsed.normals[nix[c] as usize]
                 } else {
-                    let own = || {
-                        let [p0, p1, p2] = tri.map(|k| {
-                            let p = parsed.vertices[k as usize];
-                            glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
-                        });
-                        unit_f32((p1 - p0).cross(p2 - p0))
-                    };
+                    let [p0, p1, p2] = tri.map(|k| {
+                        let p = parsed.vertices[k as usize];
+                        glam::DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+                    });
                     unit_f32(acc[tri[c] as usize])
-                        .or_else(own)
+                        .or_else(|| unit_f32((p1 - p0).cross(p2 - p0)))
                         .unwrap_or([0.0, 0.0, 1.0]) // zero area: never hit
                 };
                 out[c] = xf.apply_normal(object).ok_or_else(|| {

@@ -162,7 +162,7 @@ pub const SEED_SCENES: [&str; 5] = ["sphere", "triangle", "umbrella", "bb8", "mi
 
 /// Every scene in `scenes/` that needs no fetched mesh: the seed scenes and their shadowed
 /// variants (the README shows each).
-pub const SHIPPED_SCENES: [&str; 7] = [
+pub const SHIPPED_SCENES: [&str; 8] = [
     "sphere",
     "triangle",
     "umbrella",
@@ -170,6 +170,7 @@ pub const SHIPPED_SCENES: [&str; 7] = [
     "mitsubishi",
     "bb8-shadows",
     "mitsubishi-shadows",
+    "bb8-aa",
 ];
 
 /// Loads `scenes/NAME.toml` from the crate root.
