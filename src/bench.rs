@@ -16,7 +16,7 @@ use crate::scene::{Scene, TriangleAlgorithm};
 pub struct Row {
     /// Scene name.
     pub scene: String,
-    /// `gpu`, `gpu-general`, `cpu-f32` or `cpu-f64`.
+    /// `gpu`, `gpu-general`, `gpu-rq` (the ray-query tracer), `cpu-f32` or `cpu-f64`.
     pub tracer: String,
     /// Triangle algorithm.
     pub triangle: String,
@@ -42,6 +42,9 @@ pub struct Row {
     pub trace_ms: Option<f64>,
     /// GPU: copy and map back, ms (median).
     pub readback_ms: Option<f64>,
+    /// Ray-query tracer: the driver's acceleration-structure build, ms (median; not in the
+    /// frame time, as the BVH build is not).
+    pub accel_ms: Option<f64>,
     /// Largest channel difference to the f64 image.
     pub max_err: f64,
     /// RMS channel difference to the f64 image.
@@ -124,7 +127,11 @@ pub fn run(
         let spec = Specialisation::for_scene(&buf);
         let truth = crate::cpu::render_f64(scene, &buf, spec);
         let mirror = crate::cpu::render_f32(&buf, spec);
-        let mut row = |tracer: &str, times: Vec<f64>, img: &Image, gpu_parts: Option<[f64; 4]>| {
+        let mut row = |tracer: &str,
+                       times: Vec<f64>,
+                       img: &Image,
+                       gpu_parts: Option<[f64; 4]>,
+                       accel_ms: Option<f64>| {
             let d = diff(img, &truth);
             let equals_cpu_f32 = gpu_parts.map(|_| diff(img, &mirror).bit_exact());
             let med = median(times.clone());
@@ -143,6 +150,7 @@ pub fn run(
                 upload_ms: gpu_parts.map(|p| p[1]),
                 trace_ms: gpu_parts.map(|p| p[2]),
                 readback_ms: gpu_parts.map(|p| p[3]),
+                accel_ms,
                 max_err: d.max_abs,
                 rms_err: d.rms,
                 pixels_off: d.differing_pixels,
@@ -151,18 +159,21 @@ pub fn run(
             });
         };
         if let Some(gpu) = gpu {
-            for (tracer, sp) in [
-                ("gpu", spec),
-                ("gpu-general", Specialisation::general(&buf)),
-            ] {
-                gpu.kernel.clear_cache();
-                let compile = gpu.kernel.prepare(&gpu.device, sp)?;
+            let mut tracers = vec![
+                ("gpu", &gpu.kernel, spec),
+                ("gpu-general", &gpu.kernel, Specialisation::general(&buf)),
+            ];
+            if let Some(rq) = &gpu.ray_query {
+                tracers.push(("gpu-rq", rq, spec));
+            }
+            for (tracer, kernel, sp) in tracers {
+                kernel.clear_cache();
+                let compile = kernel.prepare(&gpu.device, sp)?;
                 let mut parts = Vec::new();
                 let mut img = None;
                 for r in 0..=runs {
                     let (i, t) =
-                        gpu.kernel
-                            .render(&gpu.device, &gpu.queue, &buf, sp, &mut |_, _| {})?;
+                        kernel.render(&gpu.device, &gpu.queue, &buf, sp, &mut |_, _| {})?;
                     if r > 0 {
                         parts.push(t);
                     }
@@ -178,7 +189,14 @@ pub fn run(
                     med(&|t| t.trace),
                     med(&|t| t.readback),
                 ];
-                row(tracer, times, img.as_ref().expect("rendered"), Some(p));
+                let accel = kernel.is_ray_query().then(|| med(&|t| t.accel));
+                row(
+                    tracer,
+                    times,
+                    img.as_ref().expect("rendered"),
+                    Some(p),
+                    accel,
+                );
             }
         }
         let timed = |f: &dyn Fn() -> Image| {
@@ -192,9 +210,9 @@ pub fn run(
             (times, img)
         };
         let (t, img) = timed(&|| crate::cpu::render_f32(&buf, spec));
-        row("cpu-f32", t, &img, None);
+        row("cpu-f32", t, &img, None, None);
         let (t, img) = timed(&|| crate::cpu::render_f64(scene, &buf, spec));
-        row("cpu-f64", t, &img, None);
+        row("cpu-f64", t, &img, None, None);
     }
     progress(total, total, "done");
     Ok(Report {
@@ -218,12 +236,12 @@ impl Report {
             self.cpu_threads,
             self.runs
         );
-        s += "| scene | tracer | triangles | primitives | BVH build ms | size | median ms (min–max) | Mrays/s | compile ms | upload ms | trace ms | readback ms | max err | RMS err | px ≥1/255 | hit/miss | = CPU f32 |\n";
-        s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        s += "| scene | tracer | triangles | primitives | BVH build ms | size | median ms (min–max) | Mrays/s | compile ms | upload ms | AS build ms | trace ms | readback ms | max err | RMS err | px ≥1/255 | hit/miss | = CPU f32 |\n";
+        s += "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         let o = |x: Option<f64>| x.map(|v| format!("{v:.1}")).unwrap_or_else(|| "–".into());
         for r in &self.rows {
             s += &format!(
-                "| {} | {} | {} | {} | {:.1} | {}×{} | {:.1} ({:.1}–{:.1}) | {:.2} | {} | {} | {} | {} | {:.2e} | {:.2e} | {} | {} | {} |\n",
+                "| {} | {} | {} | {} | {:.1} | {}×{} | {:.1} ({:.1}–{:.1}) | {:.2} | {} | {} | {} | {} | {} | {:.2e} | {:.2e} | {} | {} | {} |\n",
                 r.scene,
                 r.tracer,
                 r.triangle,
@@ -237,6 +255,7 @@ impl Report {
                 r.rays_per_s / 1e6,
                 o(r.compile_ms),
                 o(r.upload_ms),
+                o(r.accel_ms),
                 o(r.trace_ms),
                 o(r.readback_ms),
                 r.max_err,
@@ -255,7 +274,8 @@ impl Report {
 
     /// A scatter plot of speed (x: rays/s, log) against error (y: max channel error, log;
     /// exact f64 rows sit on the bottom edge). Colours: GPU red, general GPU orange,
-    /// CPU f32 blue, CPU f64 green. Grid lines at every decade.
+    /// ray-query GPU purple (a square: its error is the driver's triangle test), CPU f32
+    /// blue, CPU f64 green. Grid lines at every decade.
     pub fn plot(&self) -> image::RgbImage {
         let (w, h, m) = (800u32, 500u32, 40u32);
         let mut img = image::RgbImage::from_pixel(w, h, image::Rgb([255, 255, 255]));
@@ -279,6 +299,7 @@ impl Report {
             let c = match r.tracer.as_str() {
                 "gpu" => [220, 30, 30],
                 "gpu-general" => [240, 150, 20],
+                "gpu-rq" => [150, 40, 200],
                 "cpu-f32" => [30, 60, 220],
                 _ => [30, 160, 60],
             };
@@ -291,7 +312,7 @@ impl Report {
             let (cx, cy) = (px(lx) as i64, py(ly) as i64);
             for dy in -4i64..=4 {
                 for dx in -4i64..=4 {
-                    if dx * dx + dy * dy <= 16 {
+                    if dx * dx + dy * dy <= 16 || r.tracer == "gpu-rq" {
                         let (x, y) = (cx + dx, cy + dy);
                         if x >= 0 && y >= 0 && (x as u32) < w && (y as u32) < h {
                             img.put_pixel(x as u32, y as u32, image::Rgb(c));

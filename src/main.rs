@@ -28,6 +28,7 @@ impl From<Backend> for glint::Backend {
         match b {
             Backend::Auto => glint::Backend::Auto,
             Backend::Gpu => glint::Backend::Gpu,
+            Backend::GpuRq => glint::Backend::GpuRq,
             Backend::Cpu => glint::Backend::Cpu,
             Backend::CpuF64 => glint::Backend::CpuF64,
         }
@@ -43,6 +44,9 @@ enum Backend {
     Auto,
     /// The WGSL compute shader through wgpu (Vulkan).
     Gpu,
+    /// The shader with the triangles traced by the driver's ray queries (VK_KHR_ray_query:
+    /// ray-tracing GPUs, Mesa ≥ 24.1's lavapipe); an error where there are none.
+    GpuRq,
     /// The f32 CPU mirror of the shader.
     Cpu,
     /// The f64 CPU ground truth.
@@ -398,9 +402,15 @@ fn run(cli: Cli) -> Result<()> {
                     cpu_bands(&mut sink, &mut frame, true)?;
                     "cpu-f64".to_string()
                 }
-                glint::Tracer::Gpu(gpu) => {
+                glint::Tracer::Gpu(gpu) | glint::Tracer::GpuRq(gpu) => {
+                    let rq = matches!(renderer.tracer(), glint::Tracer::GpuRq(_));
+                    let kernel = if rq {
+                        gpu.ray_query_kernel()?
+                    } else {
+                        &gpu.kernel
+                    };
                     let mut written: Result<(), glint::image::ImageError> = Ok(());
-                    let result = gpu.kernel.render_bands(
+                    let result = kernel.render_bands(
                         &gpu.device,
                         &gpu.queue,
                         &buf,
@@ -418,10 +428,19 @@ fn run(cli: Cli) -> Result<()> {
                             written?;
                             frame = t.trace + t.readback;
                             format!(
-                                "gpu: {} (device {:.0} ms, compile {:.0} ms, trace {:.1} ms, readback {:.1} ms)",
+                                "{}: {} (device {:.0} ms, compile {:.0} ms,{} trace {:.1} ms, readback {:.1} ms)",
+                                if rq { "gpu-rq" } else { "gpu" },
                                 gpu.describe(),
                                 gpu.start_time.as_secs_f64() * 1e3,
                                 t.compile.as_secs_f64() * 1e3,
+                                if rq {
+                                    format!(
+                                        " acceleration structure {:.1} ms,",
+                                        t.accel.as_secs_f64() * 1e3
+                                    )
+                                } else {
+                                    String::new()
+                                },
                                 t.trace.as_secs_f64() * 1e3,
                                 t.readback.as_secs_f64() * 1e3
                             )
@@ -594,6 +613,28 @@ fn run(cli: Cli) -> Result<()> {
                 "cpu f32 vs f64: {} differing pixels (8-bit), {} hit/miss, largest {:.3e}, rms {:.3e}",
                 e.differing_pixels, e.hit_miss, e.max_abs, e.rms
             );
+            // The ray-query tracer where the device has one: its hits are the driver's, so it
+            // is measured against f64 beside the compute tracer, not asserted equal.
+            let q = glint::compare::diff(&g, &r);
+            let line = |name: &str, x: &glint::compare::Diff| {
+                println!(
+                    "{name} vs f64: {} hit/miss disagreements, largest channel error {:.3e}, rms {:.3e}, {} pixels off in 8 bits",
+                    x.hit_miss, x.max_abs, x.rms, x.differing_pixels
+                )
+            };
+            line("gpu", &q);
+            match gpu.ray_query_kernel() {
+                Ok(k) => {
+                    let (rq, t) = k.render(&gpu.device, &gpu.queue, &buf, spec, &mut |_, _| {})?;
+                    line("gpu-rq", &glint::compare::diff(&rq, &r));
+                    println!(
+                        "gpu-rq: acceleration structure {:.1} ms, trace {:.1} ms",
+                        t.accel.as_secs_f64() * 1e3,
+                        t.trace.as_secs_f64() * 1e3
+                    );
+                }
+                Err(e) => println!("gpu-rq: not measured: {e}"),
+            }
             glint::compare::diff_image(&g, &c)
                 .save(&diff)
                 .with_context(|| "writing the difference image")?;

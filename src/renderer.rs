@@ -24,6 +24,10 @@ pub enum Backend {
     Auto,
     /// The WGSL compute shader on a Vulkan adapter (an error when there is none).
     Gpu,
+    /// The ray-query tracer: the same shader with the triangles traced by the driver's
+    /// acceleration structure (VK_KHR_ray_query), the spheres by glint's own test. An error
+    /// where the adapter has no ray queries; `Auto` never picks it.
+    GpuRq,
     /// The f32 CPU tracer: the shader's mirror, in packets (bit for bit lavapipe's image).
     Cpu,
     /// The f64 CPU tracer: the ground truth for error.
@@ -58,6 +62,8 @@ pub enum Tracer {
     CpuF64,
     /// The shader on this device.
     Gpu(Box<Gpu>),
+    /// The ray-query shader on this device (which has ray queries).
+    GpuRq(Box<Gpu>),
 }
 
 /// Renders scenes on one backend; holds the device (if any) across renders.
@@ -80,6 +86,11 @@ impl Renderer {
             Backend::Cpu => (Tracer::Cpu, None),
             Backend::CpuF64 => (Tracer::CpuF64, None),
             Backend::Gpu => (gpu(adapter)?, None),
+            Backend::GpuRq => {
+                let g = Gpu::new(adapter)?;
+                g.ray_query_kernel()?;
+                (Tracer::GpuRq(Box::new(g)), None)
+            }
             Backend::Auto => {
                 let t0 = std::time::Instant::now();
                 let list = crate::gpu::adapters();
@@ -143,6 +154,7 @@ impl Renderer {
             Tracer::Cpu => "cpu (f32)".into(),
             Tracer::CpuF64 => "cpu-f64".into(),
             Tracer::Gpu(g) => format!("gpu: {}", g.describe()),
+            Tracer::GpuRq(g) => format!("gpu-rq: {}", g.describe()),
         }
     }
 
@@ -161,6 +173,11 @@ impl Renderer {
             Tracer::CpuF64 => crate::cpu::render_f64(scene, &buf, spec),
             Tracer::Gpu(g) => {
                 g.kernel
+                    .render(&g.device, &g.queue, &buf, spec, &mut |_, _| {})?
+                    .0
+            }
+            Tracer::GpuRq(g) => {
+                g.ray_query_kernel()?
                     .render(&g.device, &g.queue, &buf, spec, &mut |_, _| {})?
                     .0
             }

@@ -33,6 +33,8 @@ pub struct GpuTimings {
     pub trace: Duration,
     /// Copying and mapping the output back.
     pub readback: Duration,
+    /// Building the driver's acceleration structures (the ray-query tracer only).
+    pub accel: Duration,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
@@ -43,6 +45,7 @@ enum Entry {
 
 /// The shader module with its layouts and a cache of specialised pipelines.
 pub struct Kernel {
+    ray_query: bool,
     module: wgpu::ShaderModule,
     render_layout: wgpu::BindGroupLayout,
     query_layout: wgpu::BindGroupLayout,
@@ -89,7 +92,7 @@ fn scene_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
 }
 
 /// Waits for the GPU, turning a hang or a lost device into an error.
-fn wait(device: &wgpu::Device, during: &'static str) -> Result<(), GpuError> {
+pub(super) fn wait(device: &wgpu::Device, during: &'static str) -> Result<(), GpuError> {
     match device.poll(wgpu::PollType::Wait {
         submission_index: None,
         timeout: Some(GPU_TIMEOUT),
@@ -107,7 +110,7 @@ fn wait(device: &wgpu::Device, during: &'static str) -> Result<(), GpuError> {
 }
 
 /// Runs `f` inside error scopes for validation and out-of-memory errors.
-fn scoped<T>(
+pub(super) fn scoped<T>(
     device: &wgpu::Device,
     during: &'static str,
     f: impl FnOnce() -> T,
@@ -147,7 +150,11 @@ fn storage_buffer<T: Pod + Default>(
     )
 }
 
-fn check_size(device: &wgpu::Device, what: &'static str, needed: u64) -> Result<(), GpuError> {
+pub(super) fn check_size(
+    device: &wgpu::Device,
+    what: &'static str,
+    needed: u64,
+) -> Result<(), GpuError> {
     let l = device.limits();
     let limit = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
     if needed > limit {
@@ -173,10 +180,35 @@ pub fn tile_rows(device: &wgpu::Device, width: u32, height: u32) -> u32 {
 impl Kernel {
     /// Compiles the shader module on `device` (pipelines are made on first use).
     pub fn new(device: &wgpu::Device) -> Result<Kernel, GpuError> {
+        Kernel::with_flavour(device, false)
+    }
+
+    /// The ray-query tracer's kernel (`shaders/trace_rq.wgsl`): the same entry points and
+    /// buffers, the triangles traced through the driver's acceleration structure. The
+    /// device must have `Features::EXPERIMENTAL_RAY_QUERY`.
+    pub fn new_ray_query(device: &wgpu::Device) -> Result<Kernel, GpuError> {
+        Kernel::with_flavour(device, true)
+    }
+
+    /// Whether this is the ray-query kernel.
+    pub fn is_ray_query(&self) -> bool {
+        self.ray_query
+    }
+
+    fn with_flavour(device: &wgpu::Device, ray_query: bool) -> Result<Kernel, GpuError> {
         scoped(device, "shader compilation", || {
+            let source = if ray_query {
+                super::rq::shader_source().into()
+            } else {
+                SHADER_SOURCE.into()
+            };
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("trace.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
+                label: Some(if ray_query {
+                    "trace_rq.wgsl"
+                } else {
+                    "trace.wgsl"
+                }),
+                source: wgpu::ShaderSource::Wgsl(source),
             });
             let mut render = scene_entries();
             render.push(storage_entry(5, false));
@@ -184,6 +216,18 @@ impl Kernel {
             let mut query = scene_entries();
             query.push(storage_entry(6, true));
             query.push(storage_entry(7, false));
+            if ray_query {
+                let accel = wgpu::BindGroupLayoutEntry {
+                    binding: super::rq::ACCEL_BINDING,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::AccelerationStructure {
+                        vertex_return: false,
+                    },
+                    count: None,
+                };
+                render.push(accel);
+                query.push(accel);
+            }
             let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
                 device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some(label),
@@ -200,6 +244,7 @@ impl Kernel {
                 })
             };
             Kernel {
+                ray_query,
                 render_pipeline_layout: pl(&render_layout),
                 query_pipeline_layout: pl(&query_layout),
                 module,
@@ -383,12 +428,25 @@ impl Kernel {
             binding: NORMALS_BINDING,
             resource: normals.as_entire_binding(),
         });
+        let accel = if self.ray_query {
+            let a = super::rq::build(device, queue, &buf.triangles)?;
+            timings.accel = a.build;
+            Some(a)
+        } else {
+            None
+        };
+        if let Some(a) = &accel {
+            entries.push(wgpu::BindGroupEntry {
+                binding: super::rq::ACCEL_BINDING,
+                resource: wgpu::BindingResource::AccelerationStructure(&a.tlas),
+            });
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("render"),
             layout: &self.render_layout,
             entries: &entries,
         });
-        timings.upload = t0.elapsed();
+        timings.upload = t0.elapsed().saturating_sub(timings.accel);
 
         let mut y = 0;
         while y < height {
@@ -445,6 +503,11 @@ impl Kernel {
             * QUERY_WORKGROUP as usize;
         let mut out = Vec::with_capacity(rays.len());
         let scene = self.scene_buffers(device, buf)?;
+        let accel = if self.ray_query {
+            Some(super::rq::build(device, queue, &buf.triangles)?)
+        } else {
+            None
+        };
         for chunk in rays.chunks(max_rays.min(1 << 20)) {
             let bytes = (chunk.len() * size_of::<HitOut>()) as u64;
             let ray_buf = storage_buffer(device, "rays", chunk, wgpu::BufferUsages::empty())?;
@@ -476,6 +539,12 @@ impl Kernel {
                 binding: 7,
                 resource: hits.as_entire_binding(),
             });
+            if let Some(a) = &accel {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: super::rq::ACCEL_BINDING,
+                    resource: wgpu::BindingResource::AccelerationStructure(&a.tlas),
+                });
+            }
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("query"),
                 layout: &self.query_layout,

@@ -3,6 +3,7 @@
 //! inject one.
 
 mod kernel;
+pub mod rq;
 
 use std::time::{Duration, Instant};
 
@@ -50,6 +51,17 @@ pub enum GpuError {
         /// Bytes allowed.
         limit: u64,
     },
+    /// The ray-query tracer was asked for on an adapter without ray queries.
+    #[error(
+        "{adapter} has no ray queries (VK_KHR_ray_query with acceleration structures, which \
+         wgpu offers as EXPERIMENTAL_RAY_QUERY): the ray-query tracer needs Mesa ≥ 24.1's \
+         lavapipe or a ray-tracing GPU (NVIDIA RTX, AMD RDNA2 or later, Intel Arc); \
+         --backend gpu runs the compute tracer here"
+    )]
+    NoRayQuery {
+        /// The adapter asked.
+        adapter: String,
+    },
     /// Out of memory, a validation error, or a lost device during the work.
     #[error("GPU error during {during}: {message}")]
     Runtime {
@@ -78,6 +90,9 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     /// The shader module and pipelines.
     pub kernel: Kernel,
+    /// The ray-query tracer's kernel, where the device has ray queries
+    /// (`Features::EXPERIMENTAL_RAY_QUERY`: VK_KHR_ray_query and acceleration structures).
+    pub ray_query: Option<Kernel>,
     /// Time to find the adapter and create the device.
     pub start_time: Duration,
 }
@@ -189,9 +204,25 @@ impl Gpu {
             }
         };
         let info = adapter.get_info();
+        // Ray queries where the adapter has them, for the ray-query tracer; the compute
+        // tracer does not use them (and is bit-exact with them on: tests on Mesa 25).
+        let rq = adapter
+            .features()
+            .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("glint"),
-            required_features: wgpu::Features::empty(),
+            required_features: if rq {
+                wgpu::Features::EXPERIMENTAL_RAY_QUERY
+            } else {
+                wgpu::Features::empty()
+            },
+            // SAFETY: wgpu's experimental features are enabled only for its ray-query API,
+            // which the ray-query tracer uses as documented; the acknowledgement is wgpu's.
+            experimental_features: if rq {
+                unsafe { wgpu::ExperimentalFeatures::enabled() }
+            } else {
+                wgpu::ExperimentalFeatures::disabled()
+            },
             // Everything the adapter offers: large scenes need its largest storage buffers.
             required_limits: capped_limits(adapter.limits()),
             ..Default::default()
@@ -215,12 +246,31 @@ impl Gpu {
         queue: wgpu::Queue,
     ) -> Result<Gpu, GpuError> {
         let kernel = Kernel::new(&device)?;
+        let ray_query = if device
+            .features()
+            .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
+        {
+            Some(Kernel::new_ray_query(&device)?)
+        } else {
+            None
+        };
         Ok(Gpu {
             info,
             device,
             queue,
             kernel,
+            ray_query,
             start_time: Duration::ZERO,
+        })
+    }
+
+    /// The ray-query tracer's kernel, or the error that this device has none.
+    pub fn ray_query_kernel(&self) -> Result<&Kernel, GpuError> {
+        self.ray_query.as_ref().ok_or_else(|| GpuError::NoRayQuery {
+            adapter: format!(
+                "{} ({} {})",
+                self.info.name, self.info.driver, self.info.driver_info
+            ),
         })
     }
 
