@@ -1,6 +1,8 @@
 //! Shared by the integration tests: one GPU per test process, a seeded RNG, helpers.
 #![allow(dead_code)]
 
+pub mod hard;
+
 use std::sync::OnceLock;
 
 use glint::gpu::Gpu;
