@@ -32,9 +32,10 @@ key = lambda r: (r["scene"], r["tracer"], r["triangle"])
 rb = {key(r): r for r in b["rows"]}
 print(f"Seed scenes at {a['rows'][0]['size'][0]}×{a['rows'][0]['size'][1]}, median of {a['runs']} runs "
       f"after a warm-up, CPU tracers on {a['cpu_threads']} threads. GPU: lavapipe, a CPU Vulkan.\n")
-print(f"| scene | triangles | GPU {driver(a)} ms | GPU {driver(b)} ms | CPU f32 ms | CPU f64 ms "
-      f"| GPU = CPU f32 (both drivers) | largest error vs f64 | px ≥ 1/255 |")
-print("|---|---|---|---|---|---|---|---|---|")
+print(f"| scene | triangles | GPU {driver(a)} ms | GPU {driver(b)} ms | GPU-RQ {driver(b)} ms (AS build) "
+      f"| CPU f32 ms | CPU f64 ms | GPU = CPU f32 (both drivers) | largest error vs f64 | px ≥ 1/255 "
+      f"| GPU-RQ largest error, px ≥ 1/255, hit/miss |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 rows = {key(r): r for r in a["rows"]}
 for r in a["rows"]:
     if r["tracer"] != "gpu":
@@ -44,7 +45,10 @@ for r in a["rows"]:
     f64 = rows.get((k[0], "cpu-f64", k[2]))
     other = rb.get(k)
     same = " / ".join("every bit" if x and x.get("equals_cpu_f32") else "NO" for x in (r, other))
-    print(f"| {k[0]} | {k[2]} | {r['median_ms']:.1f} | {other['median_ms'] if other else float('nan'):.1f} "
+    rq = rb.get((k[0], "gpu-rq", k[2]))
+    rq_ms = f"{rq['median_ms']:.1f} ({rq['accel_ms']:.1f})" if rq else "–"
+    rq_err = f"{rq['max_err']:.1e}, {rq['pixels_off']}, {rq['hit_miss']}" if rq else "–"
+    print(f"| {k[0]} | {k[2]} | {r['median_ms']:.1f} | {other['median_ms'] if other else float('nan'):.1f} | {rq_ms} "
           f"| {cpu['median_ms'] if cpu else float('nan'):.1f} | {f64['median_ms'] if f64 else float('nan'):.1f} "
-          f"| {same} | {r['max_err']:.1e} | {r['pixels_off']} |")
+          f"| {same} | {r['max_err']:.1e} | {r['pixels_off']} | {rq_err} |")
 PY

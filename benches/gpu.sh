@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # On whatever Vulkan adapter this machine has (a real GPU, or lavapipe): the GPU tests, then
-# the bench of the seed scenes, the dragon and the peers scenes on the shader, with the
-# Mrays/s of each (primary rays per second at the median frame).
+# the bench of the seed scenes, the dragon and the peers scenes on the shader (and on the
+# ray-query tracer where the adapter has ray queries), with the Mrays/s of each (primary
+# rays per second at the median frame), the acceleration-structure build apart.
 #
 #     bash benches/gpu.sh [ADAPTER]      # ADAPTER: part of the adapter's name (default: the best)
 #
@@ -29,6 +30,6 @@ out=bench-out/gpu
     ${adapter:+--adapter "$adapter"} >/dev/null
 head -n 1 "$out/report.md"
 echo
-echo "| scene | tracer | median ms | Mrays/s | = CPU f32 |"
-echo "|---|---|---|---|---|"
-awk -F'|' 'NR > 4 && ($3 ~ /gpu|cpu-f32/) { printf "|%s|%s|%s|%s|%s|\n", $2, $3, $8, $9, $18 }' "$out/report.md"
+echo "| scene | tracer | median ms | Mrays/s | AS build ms | largest error vs f64 | hit/miss vs f64 | = CPU f32 |"
+echo "|---|---|---|---|---|---|---|---|"
+awk -F'|' 'NR > 4 && ($3 ~ /gpu|cpu-f32/) { printf "|%s|%s|%s|%s|%s|%s|%s|%s|\n", $2, $3, $8, $9, $12, $15, $18, $19 }' "$out/report.md"
