@@ -18,6 +18,9 @@ pub struct Row {
     pub scene: String,
     /// `gpu`, `gpu-general`, `gpu-rq` (the ray-query tracer), `cpu-f32` or `cpu-f64`.
     pub tracer: String,
+    /// GPU rows: the BVH traversal, `packet` (one packet per subgroup) or `per-ray`; `None`
+    /// for the ray-query and CPU rows.
+    pub traversal: Option<String>,
     /// Triangle algorithm.
     pub triangle: String,
     /// Width × height.
@@ -128,6 +131,7 @@ pub fn run(
         let truth = crate::cpu::render_f64(scene, &buf, spec);
         let mirror = crate::cpu::render_f32(&buf, spec);
         let mut row = |tracer: &str,
+                       traversal: Option<&str>,
                        times: Vec<f64>,
                        img: &Image,
                        gpu_parts: Option<[f64; 4]>,
@@ -138,6 +142,7 @@ pub fn run(
             rows.push(Row {
                 scene: name.clone(),
                 tracer: tracer.into(),
+                traversal: traversal.map(Into::into),
                 triangle: algo.name().into(),
                 size: (w, h),
                 primitives,
@@ -190,8 +195,14 @@ pub fn run(
                     med(&|t| t.readback),
                 ];
                 let accel = kernel.is_ray_query().then(|| med(&|t| t.accel));
+                let traversal = match (kernel.is_ray_query(), kernel.is_packet()) {
+                    (true, _) => None,
+                    (false, true) => Some("packet"),
+                    (false, false) => Some("per-ray"),
+                };
                 row(
                     tracer,
+                    traversal,
                     times,
                     img.as_ref().expect("rendered"),
                     Some(p),
@@ -210,9 +221,9 @@ pub fn run(
             (times, img)
         };
         let (t, img) = timed(&|| crate::cpu::render_f32(&buf, spec));
-        row("cpu-f32", t, &img, None, None);
+        row("cpu-f32", None, t, &img, None, None);
         let (t, img) = timed(&|| crate::cpu::render_f64(scene, &buf, spec));
-        row("cpu-f64", t, &img, None, None);
+        row("cpu-f64", None, t, &img, None, None);
     }
     progress(total, total, "done");
     Ok(Report {
@@ -243,7 +254,10 @@ impl Report {
             s += &format!(
                 "| {} | {} | {} | {} | {:.1} | {}×{} | {:.1} ({:.1}–{:.1}) | {:.2} | {} | {} | {} | {} | {} | {:.2e} | {:.2e} | {} | {} | {} |\n",
                 r.scene,
-                r.tracer,
+                match &r.traversal {
+                    Some(t) => format!("{} ({t})", r.tracer),
+                    None => r.tracer.clone(),
+                },
                 r.triangle,
                 r.primitives,
                 r.build_ms,

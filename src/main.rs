@@ -429,7 +429,13 @@ fn run(cli: Cli) -> Result<()> {
                             frame = t.trace + t.readback;
                             format!(
                                 "{}: {} (device {:.0} ms, compile {:.0} ms,{} trace {:.1} ms, readback {:.1} ms)",
-                                if rq { "gpu-rq" } else { "gpu" },
+                                if rq {
+                                    "gpu-rq"
+                                } else if kernel.is_packet() {
+                                    "gpu (packet traversal)"
+                                } else {
+                                    "gpu (per-ray traversal)"
+                                },
                                 gpu.describe(),
                                 gpu.start_time.as_secs_f64() * 1e3,
                                 t.compile.as_secs_f64() * 1e3,

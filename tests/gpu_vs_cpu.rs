@@ -243,3 +243,84 @@ fn shading_edge_cases_agree() {
         "pow differs by more than 1/255: {d:?}"
     );
 }
+
+/// Both traversals of the compute tracer, the per-ray one (`trace.wgsl`'s own) and the
+/// packet one (`trace_subgroup.wgsl`: one packet per subgroup, where the device has
+/// subgroups), give the CPU mirror's image in every bit, on the seed scenes, a shadowed
+/// mesh and the vertex grid, with every triangle algorithm; and their `query` entry points
+/// give the mirror's hits.
+#[test]
+fn both_traversals_agree() {
+    let Some(gpu) = common::gpu() else { return };
+    let lavapipe = common::is_lavapipe(gpu);
+    let per_ray = glint::gpu::Kernel::new(&gpu.device).expect("per-ray kernel");
+    let packet = if gpu.device.features().contains(wgpu::Features::SUBGROUP) {
+        Some(glint::gpu::Kernel::new_packet(&gpu.device).expect("packet kernel"))
+    } else {
+        eprintln!(
+            "\n*** no subgroups on {}: the packet traversal was NOT checked ***\n",
+            gpu.describe()
+        );
+        assert!(!gpu.kernel.is_packet());
+        None
+    };
+    let mut scenes: Vec<(String, glint::scene::Scene)> = ["bb8-shadows", "mitsubishi", "umbrella"]
+        .iter()
+        .map(|n| (n.to_string(), seed_scene(n)))
+        .collect();
+    let grid = common::vertex_grid_scene([0.25, -0.5, 0.75], "watertight", 160, 120, 4);
+    scenes.push((
+        "vertex grid".into(),
+        glint::scene::Scene::parse(&grid, std::path::Path::new("grid.toml")).unwrap(),
+    ));
+    for (name, scene) in &scenes {
+        for algo in TriangleAlgorithm::ALL {
+            let (buf, spec) = buffers(scene, 200, 150, algo);
+            let c = glint::cpu::render_f32(&buf, spec);
+            for (what, k) in [("per-ray", Some(&per_ray)), ("packet", packet.as_ref())] {
+                let Some(k) = k else { continue };
+                assert_eq!(k.is_packet(), what == "packet");
+                let g = k
+                    .render(&gpu.device, &gpu.queue, &buf, spec, &mut |_, _| {})
+                    .expect("render")
+                    .0;
+                check_agreement(&g, &c, lavapipe)
+                    .unwrap_or_else(|e| panic!("{name}/{algo} {what}: {e}"));
+            }
+        }
+    }
+    // Incoherent rays through `query`: a packet of rays that go everywhere.
+    let scene = seed_scene("bb8");
+    let (buf, spec) = buffers(&scene, 64, 48, TriangleAlgorithm::Watertight);
+    let mut rng = common::Rng::new(9);
+    let rays: Vec<RayIn> = (0..4099)
+        .map(|_| RayIn {
+            origin: [
+                rng.range(-3.0, 3.0),
+                rng.range(-3.0, 3.0),
+                rng.range(2.0, 8.0),
+            ],
+            t_min: 0.0,
+            dir: [
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 0.2),
+            ],
+            t_max: f32::MAX,
+        })
+        .collect();
+    let want = glint::cpu::query_f32(&buf, spec, &rays);
+    for k in [Some(&per_ray), packet.as_ref()].into_iter().flatten() {
+        let got = k
+            .query(&gpu.device, &gpu.queue, &buf, spec, &rays)
+            .expect("query");
+        let differ = got
+            .iter()
+            .zip(&want)
+            .filter(|(a, b)| bytemuck::bytes_of(*a) != bytemuck::bytes_of(*b))
+            .count();
+        if lavapipe {
+            assert_eq!(differ, 0, "query, packet = {}", k.is_packet());
+        }
+    }
+}

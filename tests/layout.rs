@@ -195,3 +195,35 @@ fn shader_constants_match_rust() {
         );
     }
 }
+
+/// The two assembled variants parse and validate too: the packet traversal (subgroup
+/// operations) and the ray-query tracer, each with the capability its device must have.
+#[test]
+fn variant_modules_parse_and_validate() {
+    for (name, src, caps) in [
+        (
+            "trace_subgroup",
+            glint::gpu::subgroup::shader_source(),
+            naga::valid::Capabilities::SUBGROUP,
+        ),
+        (
+            "trace_rq",
+            glint::gpu::rq::shader_source(),
+            naga::valid::Capabilities::RAY_QUERY,
+        ),
+    ] {
+        let m = naga::front::wgsl::parse_str(&src)
+            .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
+        let mut v = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps);
+        v.subgroup_stages(naga::valid::ShaderStages::COMPUTE);
+        v.subgroup_operations(naga::valid::SubgroupOperationSet::all());
+        v.validate(&m)
+            .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
+        for entry in ["render", "query"] {
+            assert!(
+                m.entry_points.iter().any(|e| e.name == entry),
+                "{name}: no {entry}"
+            );
+        }
+    }
+}

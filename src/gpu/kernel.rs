@@ -46,6 +46,7 @@ enum Entry {
 /// The shader module with its layouts and a cache of specialised pipelines.
 pub struct Kernel {
     ray_query: bool,
+    packet: bool,
     module: wgpu::ShaderModule,
     render_layout: wgpu::BindGroupLayout,
     query_layout: wgpu::BindGroupLayout,
@@ -180,14 +181,25 @@ pub fn tile_rows(device: &wgpu::Device, width: u32, height: u32) -> u32 {
 impl Kernel {
     /// Compiles the shader module on `device` (pipelines are made on first use).
     pub fn new(device: &wgpu::Device) -> Result<Kernel, GpuError> {
-        Kernel::with_flavour(device, false)
+        Kernel::with_flavour(device, false, false)
+    }
+
+    /// The compute tracer with packet traversal (`shaders/trace_subgroup.wgsl`): one packet
+    /// per subgroup, the same image. The device must have `Features::SUBGROUP`.
+    pub fn new_packet(device: &wgpu::Device) -> Result<Kernel, GpuError> {
+        Kernel::with_flavour(device, false, true)
+    }
+
+    /// Whether this kernel traverses in packets (one per subgroup).
+    pub fn is_packet(&self) -> bool {
+        self.packet
     }
 
     /// The ray-query tracer's kernel (`shaders/trace_rq.wgsl`): the same entry points and
     /// buffers, the triangles traced through the driver's acceleration structure. The
     /// device must have `Features::EXPERIMENTAL_RAY_QUERY`.
     pub fn new_ray_query(device: &wgpu::Device) -> Result<Kernel, GpuError> {
-        Kernel::with_flavour(device, true)
+        Kernel::with_flavour(device, true, false)
     }
 
     /// Whether this is the ray-query kernel.
@@ -195,19 +207,24 @@ impl Kernel {
         self.ray_query
     }
 
-    fn with_flavour(device: &wgpu::Device, ray_query: bool) -> Result<Kernel, GpuError> {
+    fn with_flavour(
+        device: &wgpu::Device,
+        ray_query: bool,
+        packet: bool,
+    ) -> Result<Kernel, GpuError> {
         scoped(device, "shader compilation", || {
-            let source = if ray_query {
-                super::rq::shader_source().into()
+            let (label, source) = if ray_query {
+                ("trace_rq.wgsl", super::rq::shader_source().into())
+            } else if packet {
+                (
+                    "trace_subgroup.wgsl",
+                    super::subgroup::shader_source().into(),
+                )
             } else {
-                SHADER_SOURCE.into()
+                ("trace.wgsl", SHADER_SOURCE.into())
             };
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(if ray_query {
-                    "trace_rq.wgsl"
-                } else {
-                    "trace.wgsl"
-                }),
+                label: Some(label),
                 source: wgpu::ShaderSource::Wgsl(source),
             });
             let mut render = scene_entries();
@@ -228,6 +245,15 @@ impl Kernel {
                 render.push(accel);
                 query.push(accel);
             }
+            if packet {
+                for b in [
+                    super::subgroup::NODE_WORDS_BINDING,
+                    super::subgroup::TRIANGLE_WORDS_BINDING,
+                ] {
+                    render.push(storage_entry(b, true));
+                    query.push(storage_entry(b, true));
+                }
+            }
             let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
                 device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                     label: Some(label),
@@ -245,6 +271,7 @@ impl Kernel {
             };
             Kernel {
                 ray_query,
+                packet,
                 render_pipeline_layout: pl(&render_layout),
                 query_pipeline_layout: pl(&query_layout),
                 module,
@@ -314,6 +341,20 @@ impl Kernel {
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .clear();
+    }
+
+    /// The packet traversal's dword views: the BVH nodes and the triangles bound again.
+    fn word_views<'a>(&self, scene: &'a [wgpu::Buffer; 7]) -> [wgpu::BindGroupEntry<'a>; 2] {
+        [
+            wgpu::BindGroupEntry {
+                binding: super::subgroup::NODE_WORDS_BINDING,
+                resource: scene[5].as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: super::subgroup::TRIANGLE_WORDS_BINDING,
+                resource: scene[2].as_entire_binding(),
+            },
+        ]
     }
 
     fn scene_buffers(
@@ -441,6 +482,9 @@ impl Kernel {
                 resource: wgpu::BindingResource::AccelerationStructure(&a.tlas),
             });
         }
+        if self.packet {
+            entries.extend(self.word_views(&scene));
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("render"),
             layout: &self.render_layout,
@@ -544,6 +588,9 @@ impl Kernel {
                     binding: super::rq::ACCEL_BINDING,
                     resource: wgpu::BindingResource::AccelerationStructure(&a.tlas),
                 });
+            }
+            if self.packet {
+                entries.extend(self.word_views(&scene));
             }
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("query"),

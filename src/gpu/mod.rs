@@ -4,6 +4,7 @@
 
 mod kernel;
 pub mod rq;
+pub mod subgroup;
 
 use std::time::{Duration, Instant};
 
@@ -209,13 +210,16 @@ impl Gpu {
         let rq = adapter
             .features()
             .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY);
+        // Subgroups where the adapter has them, for the packet traversal.
+        let subgroups = adapter.features() & wgpu::Features::SUBGROUP;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("glint"),
-            required_features: if rq {
-                wgpu::Features::EXPERIMENTAL_RAY_QUERY
-            } else {
-                wgpu::Features::empty()
-            },
+            required_features: subgroups
+                | if rq {
+                    wgpu::Features::EXPERIMENTAL_RAY_QUERY
+                } else {
+                    wgpu::Features::empty()
+                },
             // SAFETY: wgpu's experimental features are enabled only for its ray-query API,
             // which the ray-query tracer uses as documented; the acknowledgement is wgpu's.
             experimental_features: if rq {
@@ -245,7 +249,13 @@ impl Gpu {
         device: wgpu::Device,
         queue: wgpu::Queue,
     ) -> Result<Gpu, GpuError> {
-        let kernel = Kernel::new(&device)?;
+        let kernel = if device.features().contains(wgpu::Features::SUBGROUP)
+            && std::env::var("GLINT_TRAVERSAL").as_deref() != Ok("ray")
+        {
+            Kernel::new_packet(&device)?
+        } else {
+            Kernel::new(&device)?
+        };
         let ray_query = if device
             .features()
             .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)

@@ -1,0 +1,138 @@
+// glint's packet traversal for adapters with subgroups: `shaders/trace.wgsl` with its
+// `closest_hit_bvh` renamed `closest_hit_bvh_ray` (the per-ray traversal, kept as the
+// fallback) and this file's `closest_hit_bvh` in its place. `src/gpu/subgroup.rs` assembles
+// the module; the pipeline is made from it only where the device has `Features::SUBGROUP`.
+//
+// One packet per subgroup: the node index and the stack are the same in every lane, the
+// visits decided by votes, and each BVH node and leaf triangle fetched cooperatively: lane
+// r < 8 loads the node's dword r through a plain `array<u32>` view of the same buffer, and
+// eight constant-index shuffles hand every lane the whole node (on lavapipe a per-lane load
+// inside a loop is a per-lane loop with a bounds check per dword; a constant shuffle is one
+// vector shuffle). Each lane keeps a `live` flag, pushed with every stack entry: it tests
+// a box or accepts a hit only where its own traversal would have gone (the CPU packet
+// tracer's masks). The nearest hit is the smallest t, then the lowest id, so the visiting
+// order cannot change a lane's answer: it is `closest_hit_bvh_ray`'s, bit for bit.
+
+/// The BVH nodes (the `nodes` buffer) as dwords, 8 per node.
+@group(0) @binding(12) var<storage, read> node_words: array<u32>;
+/// The triangles (the `triangles` buffer) as dwords, 12 per triangle.
+@group(0) @binding(13) var<storage, read> triangle_words: array<u32>;
+
+/// Node k, fetched by the whole subgroup: lane r loads dword r (r = its rank mod 8).
+/// Every lane of 0..7 must be active.
+fn fetch_node(k: u32, r: u32) -> BvhNode {
+    let w = node_words[k * 8u + r];
+    return BvhNode(
+        vec3<f32>(bitcast<f32>(subgroupShuffle(w, 0u)), bitcast<f32>(subgroupShuffle(w, 1u)), bitcast<f32>(subgroupShuffle(w, 2u))),
+        subgroupShuffle(w, 3u),
+        vec3<f32>(bitcast<f32>(subgroupShuffle(w, 4u)), bitcast<f32>(subgroupShuffle(w, 5u)), bitcast<f32>(subgroupShuffle(w, 6u))),
+        subgroupShuffle(w, 7u),
+    );
+}
+
+/// Triangle k, fetched by the whole subgroup: lane r loads dwords r and r + 8 (the
+/// second only below 12). Every lane of 0..7 must be active.
+fn fetch_triangle(k: u32, r: u32) -> Triangle {
+    let w0 = triangle_words[k * 12u + r];
+    let w1 = triangle_words[k * 12u + 8u + (r & 3u)];
+    return Triangle(
+        vec3<f32>(bitcast<f32>(subgroupShuffle(w0, 0u)), bitcast<f32>(subgroupShuffle(w0, 1u)), bitcast<f32>(subgroupShuffle(w0, 2u))),
+        subgroupShuffle(w0, 3u),
+        vec3<f32>(bitcast<f32>(subgroupShuffle(w0, 4u)), bitcast<f32>(subgroupShuffle(w0, 5u)), bitcast<f32>(subgroupShuffle(w0, 6u))),
+        subgroupShuffle(w0, 7u),
+        vec3<f32>(bitcast<f32>(subgroupShuffle(w1, 0u)), bitcast<f32>(subgroupShuffle(w1, 1u)), bitcast<f32>(subgroupShuffle(w1, 2u))),
+        subgroupShuffle(w1, 3u),
+    );
+}
+
+/// The number of lanes whose `b` is true.
+fn votes(b: bool) -> u32 {
+    let v = subgroupBallot(b);
+    return countOneBits(v.x) + countOneBits(v.y) + countOneBits(v.z) + countOneBits(v.w);
+}
+
+/// `closest_hit_bvh` for the subgroup as one packet (see the top of this file). Falls
+/// back to the per-ray traversal when lanes 0..7 are not all active (the edge of a tile,
+/// the last rays of a query, a subgroup narrower than 8).
+fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
+    if (subgroupBallot(true).x & 0xffu) != 0xffu {
+        return closest_hit_bvh_ray(ray, t_min, t_max);
+    }
+    let r = subgroupExclusiveAdd(1u) & 7u;
+    var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
+    let sh = ray_shear(ray.dir);
+    let inv_dir = 1.0 / ray.dir;
+    if params.n_nodes == 0u {
+        return best;
+    }
+    let root = box_interval(fetch_node(0u, r), ray.origin, inv_dir, t_min, t_max);
+    var live = root.x <= root.y;
+    if !subgroupAny(live) {
+        return best;
+    }
+    var stack: array<u32, BVH_STACK>;
+    var sp = 0u;
+    var at = 0u;
+    for (var step = 0u; step < params.n_nodes; step = step + 1u) {
+        let node = fetch_node(at, r);
+        let count = node.count_axis >> 2u;
+        if count == 0u {
+            let bound = tie_bound(best);
+            let left = box_interval(fetch_node(at + 1u, r), ray.origin, inv_dir, t_min, bound);
+            let right = box_interval(fetch_node(node.first, r), ray.origin, inv_dir, t_min, bound);
+            let hit_left = live && left.x <= left.y;
+            let hit_right = live && right.x <= right.y;
+            let any_left = subgroupAny(hit_left);
+            let any_right = subgroupAny(hit_right);
+            if any_left && any_right {
+                let both = hit_left && hit_right;
+                let right_first = votes(both && right.x < left.x) > votes(both && !(right.x < left.x));
+                if right_first {
+                    stack[sp] = (at + 1u) | select(0u, 0x80000000u, hit_left);
+                    at = node.first;
+                    live = hit_right;
+                } else {
+                    stack[sp] = node.first | select(0u, 0x80000000u, hit_right);
+                    at = at + 1u;
+                    live = hit_left;
+                }
+                sp = sp + 1u;
+                continue;
+            }
+            if any_left {
+                at = at + 1u;
+                live = hit_left;
+                continue;
+            }
+            if any_right {
+                at = node.first;
+                live = hit_right;
+                continue;
+            }
+        } else {
+            for (var k = node.first; k < node.first + count; k = k + 1u) {
+                let id = prim_ids[k];
+                var h = vec3<f32>(INFINITY, 0.0, 0.0);
+                if (id & TRIANGLE_BIT) != 0u {
+                    if HAS_TRIANGLES {
+                        let tri = fetch_triangle(id & ~TRIANGLE_BIT, r);
+                        h = hit_triangle(ray, sh, tri, t_min, tie_bound(best));
+                    }
+                } else if HAS_SPHERES {
+                    h = vec3<f32>(hit_sphere(ray, spheres[id], t_min, tie_bound(best)), 0.0, 0.0);
+                }
+                if live && nearer(h.x, id, best) {
+                    best = Hit(h.x, id, h.y, h.z);
+                }
+            }
+        }
+        if sp == 0u {
+            break;
+        }
+        sp = sp - 1u;
+        let e = stack[sp];
+        at = e & 0x7fffffffu;
+        live = (e >> 31u) != 0u;
+    }
+    return best;
+}
