@@ -85,13 +85,17 @@ fn frame_times(
     let gpu_ms = match gpu.filter(|_| timing) {
         None => None,
         Some(g) => {
-            g.kernel
+            g.compute_kernel(spec)
                 .render(&g.device, &g.queue, &buf, spec, &mut |_, _| {})?;
             let mut v = Vec::new();
             for _ in 0..runs {
-                let (_, t) = g
-                    .kernel
-                    .render(&g.device, &g.queue, &buf, spec, &mut |_, _| {})?;
+                let (_, t) = g.compute_kernel(spec).render(
+                    &g.device,
+                    &g.queue,
+                    &buf,
+                    spec,
+                    &mut |_, _| {},
+                )?;
                 v.push(t.trace);
             }
             Some(median(v))

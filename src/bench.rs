@@ -165,8 +165,12 @@ pub fn run(
         };
         if let Some(gpu) = gpu {
             let mut tracers = vec![
-                ("gpu", &gpu.kernel, spec),
-                ("gpu-general", &gpu.kernel, Specialisation::general(&buf)),
+                ("gpu", gpu.compute_kernel(spec), spec),
+                (
+                    "gpu-general",
+                    gpu.compute_kernel(Specialisation::general(&buf)),
+                    Specialisation::general(&buf),
+                ),
             ];
             if let Some(rq) = &gpu.ray_query {
                 tracers.push(("gpu-rq", rq, spec));

@@ -407,7 +407,7 @@ fn run(cli: Cli) -> Result<()> {
                     let kernel = if rq {
                         gpu.ray_query_kernel()?
                     } else {
-                        &gpu.kernel
+                        gpu.compute_kernel(spec)
                     };
                     let mut written: Result<(), glint::image::ImageError> = Ok(());
                     let result = kernel.render_bands(
@@ -590,15 +590,27 @@ fn run(cli: Cli) -> Result<()> {
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
             let gpu = Gpu::new(adapter.as_deref())?;
-            let (g, _) = gpu
-                .kernel
-                .render(&gpu.device, &gpu.queue, &buf, spec, &mut |_, _| {})?;
+            let (g, _) = gpu.compute_kernel(spec).render(
+                &gpu.device,
+                &gpu.queue,
+                &buf,
+                spec,
+                &mut |_, _| {},
+            )?;
             let c = glint::cpu::render_f32(&buf, spec);
             let r = glint::cpu::render_f64(&s, &buf, spec);
             let d = glint::compare::diff(&g, &c);
             let e = glint::compare::diff(&c, &r);
             println!("adapter: {}", gpu.describe());
-            println!("scene: {} at {w}x{h}, triangles: {algo}", scene.display());
+            println!(
+                "scene: {} at {w}x{h}, triangles: {algo}, traversal: {}",
+                scene.display(),
+                if gpu.compute_kernel(spec).is_packet() {
+                    "packet"
+                } else {
+                    "per-ray"
+                }
+            );
             println!(
                 "gpu vs cpu: {} differing pixels (8-bit), {} differing in some f32 bit, {} hit/miss disagreements, \
                  {} hits at a distance t that differs in some bit, \

@@ -20,7 +20,7 @@ fn frame_of_8192_squared_renders_in_tiles() {
     );
     let mut calls = Vec::new();
     let (img, _) = gpu
-        .kernel
+        .compute_kernel(spec)
         .render(&gpu.device, &gpu.queue, &buf, spec, &mut |d, n| {
             calls.push((d, n))
         })

@@ -590,7 +590,7 @@ fn many_samples_still_tile_and_report_progress() {
     assert!(spec.antialias);
     let mut calls = Vec::new();
     let (g, _) = gpu
-        .kernel
+        .compute_kernel(spec)
         .render(&gpu.device, &gpu.queue, &buf, spec, &mut |done, all| {
             calls.push((done, all))
         })

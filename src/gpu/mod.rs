@@ -89,8 +89,11 @@ pub struct Gpu {
     pub device: wgpu::Device,
     /// Its queue.
     pub queue: wgpu::Queue,
-    /// The shader module and pipelines.
+    /// The shader module and pipelines, with the per-ray traversal.
     pub kernel: Kernel,
+    /// The packet traversal's kernel, where the device has subgroups (and
+    /// `GLINT_TRAVERSAL` is not `ray`); [`Gpu::compute_kernel`] picks it for BVH scenes.
+    pub packet: Option<Kernel>,
     /// The ray-query tracer's kernel, where the device has ray queries
     /// (`Features::EXPERIMENTAL_RAY_QUERY`: VK_KHR_ray_query and acceleration structures).
     pub ray_query: Option<Kernel>,
@@ -249,12 +252,13 @@ impl Gpu {
         device: wgpu::Device,
         queue: wgpu::Queue,
     ) -> Result<Gpu, GpuError> {
-        let kernel = if device.features().contains(wgpu::Features::SUBGROUP)
+        let kernel = Kernel::new(&device)?;
+        let packet = if device.features().contains(wgpu::Features::SUBGROUP)
             && std::env::var("GLINT_TRAVERSAL").as_deref() != Ok("ray")
         {
-            Kernel::new_packet(&device)?
+            Some(Kernel::new_packet(&device)?)
         } else {
-            Kernel::new(&device)?
+            None
         };
         let ray_query = if device
             .features()
@@ -269,9 +273,21 @@ impl Gpu {
             device,
             queue,
             kernel,
+            packet,
             ray_query,
             start_time: Duration::ZERO,
         })
+    }
+
+    /// The compute tracer's kernel for a scene specialised as `spec`: the packet traversal
+    /// where the device has it and the scene is traced through the BVH (a scene tested
+    /// primitive by primitive has no traversal to share), else the per-ray one. Both give
+    /// the same image, bit for bit on lavapipe.
+    pub fn compute_kernel(&self, spec: crate::buffers::Specialisation) -> &Kernel {
+        match &self.packet {
+            Some(p) if spec.use_bvh => p,
+            _ => &self.kernel,
+        }
     }
 
     /// The ray-query tracer's kernel, or the error that this device has none.

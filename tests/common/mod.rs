@@ -195,9 +195,10 @@ pub fn buffers(
     (buf, spec)
 }
 
-/// Renders on the GPU.
+/// Renders on the GPU, with the traversal glint would use (packets for BVH scenes where
+/// the device has subgroups).
 pub fn render_gpu(gpu: &Gpu, buf: &SceneBuffers, spec: Specialisation) -> Image {
-    gpu.kernel
+    gpu.compute_kernel(spec)
         .render(&gpu.device, &gpu.queue, buf, spec, &mut |_, _| {})
         .expect("GPU render")
         .0
@@ -309,7 +310,7 @@ pub fn query_both(
     );
     if let Some(gpu) = gpu() {
         let g = gpu
-            .kernel
+            .compute_kernel(spec)
             .query(&gpu.device, &gpu.queue, buf, spec, rays)
             .expect("GPU query");
         let bad = g
