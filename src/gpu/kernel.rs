@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use bytemuck::Pod;
 use wgpu::util::DeviceExt;
 
+use super::sync::{check_size, scoped, wait};
 use super::{GpuError, SHADER_SOURCE};
 use crate::buffers::{HitOut, Params, RayIn, SceneBuffers, Specialisation};
 use crate::image::Image;
@@ -19,8 +20,6 @@ pub const QUERY_WORKGROUP: u32 = 64;
 /// Most pixels in one dispatch (16 bytes each): small enough for every device's storage
 /// buffer limit and for a display driver's watchdog, large enough to keep a GPU busy.
 pub const MAX_TILE_PIXELS: u64 = 1 << 22;
-/// How long one wait for the GPU may take before the render is abandoned as hung.
-pub const GPU_TIMEOUT: Duration = Duration::from_secs(600);
 
 /// Where the GPU's time went, apart.
 #[derive(Clone, Copy, Debug, Default)]
@@ -92,44 +91,6 @@ fn scene_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
     v
 }
 
-/// Waits for the GPU, turning a hang or a lost device into an error.
-pub(super) fn wait(device: &wgpu::Device, during: &'static str) -> Result<(), GpuError> {
-    match device.poll(wgpu::PollType::Wait {
-        submission_index: None,
-        timeout: Some(GPU_TIMEOUT),
-    }) {
-        Ok(_) => Ok(()),
-        Err(wgpu::PollError::Timeout) => Err(GpuError::Timeout {
-            during,
-            seconds: GPU_TIMEOUT.as_secs(),
-        }),
-        Err(e) => Err(GpuError::Runtime {
-            during,
-            message: e.to_string(),
-        }),
-    }
-}
-
-/// Runs `f` inside error scopes for validation and out-of-memory errors.
-pub(super) fn scoped<T>(
-    device: &wgpu::Device,
-    during: &'static str,
-    f: impl FnOnce() -> T,
-) -> Result<T, GpuError> {
-    let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let val = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let out = f();
-    let v = pollster::block_on(val.pop());
-    let o = pollster::block_on(oom.pop());
-    match v.or(o) {
-        None => Ok(out),
-        Some(e) => Err(GpuError::Runtime {
-            during,
-            message: e.to_string(),
-        }),
-    }
-}
-
 /// A storage buffer holding `data`, or one zeroed element when `data` is empty (WGSL has
 /// no empty bindings). Fails when the device's limits are smaller than the data.
 fn storage_buffer<T: Pod + Default>(
@@ -149,23 +110,6 @@ fn storage_buffer<T: Pod + Default>(
             usage: wgpu::BufferUsages::STORAGE | usage,
         }),
     )
-}
-
-pub(super) fn check_size(
-    device: &wgpu::Device,
-    what: &'static str,
-    needed: u64,
-) -> Result<(), GpuError> {
-    let l = device.limits();
-    let limit = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
-    if needed > limit {
-        return Err(GpuError::TooLarge {
-            what,
-            needed,
-            limit,
-        });
-    }
-    Ok(())
 }
 
 /// The rows of each tile of a `width`×`height` frame, within the device's limits.

@@ -5,6 +5,7 @@
 mod kernel;
 pub mod rq;
 pub mod subgroup;
+mod sync;
 
 use std::time::{Duration, Instant};
 

@@ -65,7 +65,7 @@ pub fn build(
         triangles
     };
     let bytes: &[u8] = bytemuck::cast_slice(tris);
-    super::kernel::check_size(
+    super::sync::check_size(
         device,
         "the acceleration structure's vertices",
         bytes.len() as u64,
@@ -82,7 +82,7 @@ pub fn build(
         index_count: None,
         flags: wgpu::AccelerationStructureGeometryFlags::OPAQUE,
     };
-    super::kernel::scoped(device, "acceleration structure build", || {
+    super::sync::scoped(device, "acceleration structure build", || {
         let blas = device.create_blas(
             &wgpu::CreateBlasDescriptor {
                 label: Some("glint triangles"),
@@ -124,7 +124,7 @@ pub fn build(
         (tlas, blas)
     })
     .and_then(|(tlas, blas)| {
-        super::kernel::wait(device, "acceleration structure build")?;
+        super::sync::wait(device, "acceleration structure build")?;
         Ok(Accel {
             tlas,
             blas,
