@@ -6,7 +6,7 @@ mod common;
 
 gpu_sentinel!();
 
-use common::hard::{FAR, add, fan, fan_rays, leaks, ray, sub, t_error, uv_sphere};
+use common::hard::{FAR, fan, fan_rays, leaks, ray, rays_from_inside, sub, t_error, uv_sphere};
 use common::{Rng, geometry, query_both, tri};
 use glint::buffers::{PRIM_NONE, RayIn, Sphere};
 use glint::oracle;
@@ -48,26 +48,7 @@ fn closed_sphere_mesh_holds_every_ray() {
     for (where_, c) in [("origin", [0.0; 3]), ("far", FAR)] {
         let tris = uv_sphere(c, 2.0, 50);
         let mut rng = Rng::new(2);
-        let rays: Vec<RayIn> = (0..100_000)
-            .map(|_| {
-                let o = add(
-                    [
-                        rng.range(-0.5, 0.5),
-                        rng.range(-0.5, 0.5),
-                        rng.range(-0.5, 0.5),
-                    ],
-                    c,
-                );
-                ray(
-                    o,
-                    [
-                        rng.range(-1.0, 1.0),
-                        rng.range(-1.0, 1.0),
-                        rng.range(-1.0, 1.0),
-                    ],
-                )
-            })
-            .collect();
+        let rays = rays_from_inside(c, &mut rng, 100_000);
         for algo in TriangleAlgorithm::ALL {
             let (buf, spec) = geometry(vec![], tris.clone(), algo);
             assert!(spec.use_bvh, "the closed mesh is traced through the BVH");

@@ -15,7 +15,7 @@ gpu_sentinel!();
 
 use std::path::Path;
 
-use common::hard::{FAR, add, fan, fan_rays, leaks, ray, t_error, uv_sphere};
+use common::hard::{FAR, add, fan, fan_rays, leaks, ray, rays_from_inside, t_error, uv_sphere};
 use common::{Rng, geometry, seed_scene, vertex_grid_scene};
 use glint::buffers::{HitOut, PRIM_NONE, RayIn, SceneBuffers, Specialisation};
 use glint::compare::diff;
@@ -87,9 +87,9 @@ fn offered_only_where_the_feature_exists() {
     let Some(gpu) = common::gpu() else { return };
     let adapter = std::env::var("GLINT_ADAPTER").ok();
     let r = glint::Renderer::with_adapter(glint::Backend::GpuRq, adapter.as_deref());
-    match (&gpu.ray_query, r) {
-        (Some(_), Ok(r)) => assert!(r.describe().starts_with("gpu-rq: "), "{}", r.describe()),
-        (None, Err(e)) => {
+    match (gpu.has_ray_query(), r) {
+        (true, Ok(r)) => assert!(r.describe().starts_with("gpu-rq: "), "{}", r.describe()),
+        (false, Err(e)) => {
             let m = e.to_string();
             assert!(
                 m.contains("has no ray queries") && m.contains("Mesa ≥ 24.1"),
@@ -99,7 +99,7 @@ fn offered_only_where_the_feature_exists() {
         }
         (have, r) => panic!(
             "ray queries {} but the renderer {}",
-            if have.is_some() { "present" } else { "absent" },
+            if have { "present" } else { "absent" },
             if r.is_ok() { "was made" } else { "failed" }
         ),
     }
@@ -233,26 +233,7 @@ fn hard_cases_measured_beside_glints_tests() {
     for (where_, c) in [("origin", [0.0; 3]), ("far", FAR)] {
         let tris = uv_sphere(c, 2.0, 50);
         let mut rng = Rng::new(2);
-        let inside: Vec<RayIn> = (0..100_000)
-            .map(|_| {
-                let o = add(
-                    [
-                        rng.range(-0.5, 0.5),
-                        rng.range(-0.5, 0.5),
-                        rng.range(-0.5, 0.5),
-                    ],
-                    c,
-                );
-                ray(
-                    o,
-                    [
-                        rng.range(-1.0, 1.0),
-                        rng.range(-1.0, 1.0),
-                        rng.range(-1.0, 1.0),
-                    ],
-                )
-            })
-            .collect();
+        let inside = rays_from_inside(c, &mut rng, 100_000);
         // From outside, aimed at points well inside the silhouette (radius ≤ 1.5 of 2).
         let outside: Vec<RayIn> = (0..20_000)
             .map(|_| {

@@ -134,3 +134,28 @@ pub fn uv_sphere(c: [f32; 3], r: f64, seg: usize) -> Vec<Triangle> {
     }
     out
 }
+
+/// `n` rays from random points within 0.5 of `c` (inside the UV sphere of radius 2 there)
+/// in random directions: the closed-mesh tests' rays from inside.
+pub fn rays_from_inside(c: [f32; 3], rng: &mut Rng, n: usize) -> Vec<RayIn> {
+    (0..n)
+        .map(|_| {
+            let o = add(
+                [
+                    rng.range(-0.5, 0.5),
+                    rng.range(-0.5, 0.5),
+                    rng.range(-0.5, 0.5),
+                ],
+                c,
+            );
+            ray(
+                o,
+                [
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                ],
+            )
+        })
+        .collect()
+}
