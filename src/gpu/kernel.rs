@@ -287,18 +287,53 @@ impl Kernel {
             .clear();
     }
 
-    /// The packet traversal's dword views: the BVH nodes and the triangles bound again.
-    fn word_views<'a>(&self, scene: &'a [wgpu::Buffer; 7]) -> [wgpu::BindGroupEntry<'a>; 2] {
-        [
-            wgpu::BindGroupEntry {
+    /// The scene's bind-group entries: its buffers at `SCENE_BINDINGS`, then what this
+    /// kernel's flavour adds: the acceleration structure (ray queries; `accel` must then be
+    /// given), or the BVH nodes and triangles again as dword views (packet traversal).
+    fn scene_bindings<'a>(
+        &self,
+        scene: &'a [wgpu::Buffer; 7],
+        accel: Option<&'a super::rq::Accel>,
+    ) -> Vec<wgpu::BindGroupEntry<'a>> {
+        let mut entries: Vec<wgpu::BindGroupEntry> = scene
+            .iter()
+            .enumerate()
+            .map(|(k, b)| wgpu::BindGroupEntry {
+                binding: SCENE_BINDINGS[k],
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        if let Some(a) = accel {
+            entries.push(wgpu::BindGroupEntry {
+                binding: super::rq::ACCEL_BINDING,
+                resource: wgpu::BindingResource::AccelerationStructure(&a.tlas),
+            });
+        }
+        if self.packet {
+            entries.push(wgpu::BindGroupEntry {
                 binding: super::subgroup::NODE_WORDS_BINDING,
                 resource: scene[5].as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
+            });
+            entries.push(wgpu::BindGroupEntry {
                 binding: super::subgroup::TRIANGLE_WORDS_BINDING,
                 resource: scene[2].as_entire_binding(),
-            },
-        ]
+            });
+        }
+        entries
+    }
+
+    /// The driver's acceleration structure over `buf`'s triangles for the ray-query
+    /// kernel (built and waited for); `None` for the others.
+    fn accel(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &SceneBuffers,
+    ) -> Result<Option<super::rq::Accel>, GpuError> {
+        if !self.ray_query {
+            return Ok(None);
+        }
+        super::rq::build(device, queue, &buf.triangles).map(Some)
     }
 
     fn scene_buffers(
@@ -397,14 +432,9 @@ impl Kernel {
                 });
                 Ok((scene, normals, output, staging))
             })??;
-        let mut entries: Vec<wgpu::BindGroupEntry> = scene
-            .iter()
-            .enumerate()
-            .map(|(k, b)| wgpu::BindGroupEntry {
-                binding: SCENE_BINDINGS[k],
-                resource: b.as_entire_binding(),
-            })
-            .collect();
+        let accel = self.accel(device, queue, buf)?;
+        timings.accel = accel.as_ref().map_or(Duration::ZERO, |a| a.build);
+        let mut entries = self.scene_bindings(&scene, accel.as_ref());
         entries.push(wgpu::BindGroupEntry {
             binding: 5,
             resource: output.as_entire_binding(),
@@ -413,22 +443,6 @@ impl Kernel {
             binding: NORMALS_BINDING,
             resource: normals.as_entire_binding(),
         });
-        let accel = if self.ray_query {
-            let a = super::rq::build(device, queue, &buf.triangles)?;
-            timings.accel = a.build;
-            Some(a)
-        } else {
-            None
-        };
-        if let Some(a) = &accel {
-            entries.push(wgpu::BindGroupEntry {
-                binding: super::rq::ACCEL_BINDING,
-                resource: wgpu::BindingResource::AccelerationStructure(&a.tlas),
-            });
-        }
-        if self.packet {
-            entries.extend(self.word_views(&scene));
-        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("render"),
             layout: &self.render_layout,
@@ -491,11 +505,7 @@ impl Kernel {
             * QUERY_WORKGROUP as usize;
         let mut out = Vec::with_capacity(rays.len());
         let scene = self.scene_buffers(device, buf)?;
-        let accel = if self.ray_query {
-            Some(super::rq::build(device, queue, &buf.triangles)?)
-        } else {
-            None
-        };
+        let accel = self.accel(device, queue, buf)?;
         for chunk in rays.chunks(max_rays.min(1 << 20)) {
             let bytes = (chunk.len() * size_of::<HitOut>()) as u64;
             let ray_buf = storage_buffer(device, "rays", chunk, wgpu::BufferUsages::empty())?;
@@ -511,14 +521,7 @@ impl Kernel {
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let mut entries: Vec<wgpu::BindGroupEntry> = scene
-                .iter()
-                .enumerate()
-                .map(|(k, b)| wgpu::BindGroupEntry {
-                    binding: SCENE_BINDINGS[k],
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
+            let mut entries = self.scene_bindings(&scene, accel.as_ref());
             entries.push(wgpu::BindGroupEntry {
                 binding: 6,
                 resource: ray_buf.as_entire_binding(),
@@ -527,15 +530,6 @@ impl Kernel {
                 binding: 7,
                 resource: hits.as_entire_binding(),
             });
-            if let Some(a) = &accel {
-                entries.push(wgpu::BindGroupEntry {
-                    binding: super::rq::ACCEL_BINDING,
-                    resource: wgpu::BindingResource::AccelerationStructure(&a.tlas),
-                });
-            }
-            if self.packet {
-                entries.extend(self.word_views(&scene));
-            }
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("query"),
                 layout: &self.query_layout,
