@@ -85,11 +85,11 @@ fn frame_times(
     let gpu_ms = match gpu.filter(|_| timing) {
         None => None,
         Some(g) => {
-            g.compute_kernel(spec)
+            g.compute_kernel(spec)?
                 .render(&g.device, &g.queue, &buf, spec, &mut |_, _| {})?;
             let mut v = Vec::new();
             for _ in 0..runs {
-                let (_, t) = g.compute_kernel(spec).render(
+                let (_, t) = g.compute_kernel(spec)?.render(
                     &g.device,
                     &g.queue,
                     &buf,

@@ -165,14 +165,15 @@ pub fn run(
         };
         if let Some(gpu) = gpu {
             let mut tracers = vec![
-                ("gpu", gpu.compute_kernel(spec), spec),
+                ("gpu", gpu.compute_kernel(spec)?, spec),
                 (
                     "gpu-general",
-                    gpu.compute_kernel(Specialisation::general(&buf)),
+                    gpu.compute_kernel(Specialisation::general(&buf))?,
                     Specialisation::general(&buf),
                 ),
             ];
-            if let Some(rq) = &gpu.ray_query {
+            if gpu.has_ray_query() {
+                let rq = gpu.ray_query_kernel()?;
                 tracers.push(("gpu-rq", rq, spec));
             }
             for (tracer, kernel, sp) in tracers {

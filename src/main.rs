@@ -407,7 +407,7 @@ fn run(cli: Cli) -> Result<()> {
                     let kernel = if rq {
                         gpu.ray_query_kernel()?
                     } else {
-                        gpu.compute_kernel(spec)
+                        gpu.compute_kernel(spec)?
                     };
                     let mut written: Result<(), glint::image::ImageError> = Ok(());
                     let result = kernel.render_bands(
@@ -590,7 +590,7 @@ fn run(cli: Cli) -> Result<()> {
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
             let gpu = Gpu::new(adapter.as_deref())?;
-            let (g, _) = gpu.compute_kernel(spec).render(
+            let (g, _) = gpu.compute_kernel(spec)?.render(
                 &gpu.device,
                 &gpu.queue,
                 &buf,
@@ -605,7 +605,7 @@ fn run(cli: Cli) -> Result<()> {
             println!(
                 "scene: {} at {w}x{h}, triangles: {algo}, traversal: {}",
                 scene.display(),
-                if gpu.compute_kernel(spec).is_packet() {
+                if gpu.compute_kernel(spec)?.is_packet() {
                     "packet"
                 } else {
                     "per-ray"

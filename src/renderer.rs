@@ -172,7 +172,7 @@ impl Renderer {
             Tracer::Cpu => crate::cpu::render_f32(&buf, spec),
             Tracer::CpuF64 => crate::cpu::render_f64(scene, &buf, spec),
             Tracer::Gpu(g) => {
-                g.compute_kernel(spec)
+                g.compute_kernel(spec)?
                     .render(&g.device, &g.queue, &buf, spec, &mut |_, _| {})?
                     .0
             }

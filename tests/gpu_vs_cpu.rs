@@ -125,6 +125,7 @@ fn query_entry_point_agrees() {
         let (buf, spec) = buffers(&scene, 64, 64, algo);
         let g = gpu
             .compute_kernel(spec)
+            .expect("kernel")
             .query(&gpu.device, &gpu.queue, &buf, spec, &rays)
             .expect("query");
         let c = glint::cpu::query_f32(&buf, spec, &rays);
@@ -262,7 +263,7 @@ fn both_traversals_agree() {
             "\n*** no subgroups on {}: the packet traversal was NOT checked ***\n",
             gpu.describe()
         );
-        assert!(gpu.packet.is_none());
+        assert!(gpu.packet_kernel().expect("kernel").is_none());
         None
     };
     let mut scenes: Vec<(String, glint::scene::Scene)> = ["bb8-shadows", "mitsubishi", "umbrella"]

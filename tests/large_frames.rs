@@ -21,6 +21,7 @@ fn frame_of_8192_squared_renders_in_tiles() {
     let mut calls = Vec::new();
     let (img, _) = gpu
         .compute_kernel(spec)
+        .expect("kernel")
         .render(&gpu.device, &gpu.queue, &buf, spec, &mut |d, n| {
             calls.push((d, n))
         })

@@ -591,6 +591,7 @@ fn many_samples_still_tile_and_report_progress() {
     let mut calls = Vec::new();
     let (g, _) = gpu
         .compute_kernel(spec)
+        .expect("kernel")
         .render(&gpu.device, &gpu.queue, &buf, spec, &mut |done, all| {
             calls.push((done, all))
         })

@@ -7,6 +7,7 @@ pub mod rq;
 pub mod subgroup;
 mod sync;
 
+use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 pub use kernel::{GpuTimings, Kernel, tile_rows};
@@ -15,7 +16,7 @@ pub use kernel::{GpuTimings, Kernel, tile_rows};
 pub const SHADER_SOURCE: &str = include_str!("../../shaders/trace.wgsl");
 
 /// Why the GPU tracer could not run.
-#[derive(Debug, thiserror::Error)]
+#[derive(Clone, Debug, thiserror::Error)]
 pub enum GpuError {
     /// No Vulkan adapter at all.
     #[error(
@@ -92,12 +93,10 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     /// The shader module and pipelines, with the per-ray traversal.
     pub kernel: Kernel,
-    /// The packet traversal's kernel, where the device has subgroups (and
-    /// `GLINT_TRAVERSAL` is not `ray`); [`Gpu::compute_kernel`] picks it for BVH scenes.
-    pub packet: Option<Kernel>,
-    /// The ray-query tracer's kernel, where the device has ray queries
-    /// (`Features::EXPERIMENTAL_RAY_QUERY`: VK_KHR_ray_query and acceleration structures).
-    pub ray_query: Option<Kernel>,
+    /// The packet traversal's kernel, made on first use ([`Gpu::packet_kernel`]).
+    packet: OnceLock<Result<Option<Kernel>, GpuError>>,
+    /// The ray-query tracer's kernel, made on first use ([`Gpu::ray_query_kernel`]).
+    ray_query: OnceLock<Result<Kernel, GpuError>>,
     /// Time to find the adapter and create the device.
     pub start_time: Duration,
 }
@@ -254,28 +253,13 @@ impl Gpu {
         queue: wgpu::Queue,
     ) -> Result<Gpu, GpuError> {
         let kernel = Kernel::new(&device)?;
-        let packet = if device.features().contains(wgpu::Features::SUBGROUP)
-            && std::env::var("GLINT_TRAVERSAL").as_deref() != Ok("ray")
-        {
-            Some(Kernel::new_packet(&device)?)
-        } else {
-            None
-        };
-        let ray_query = if device
-            .features()
-            .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
-        {
-            Some(Kernel::new_ray_query(&device)?)
-        } else {
-            None
-        };
         Ok(Gpu {
             info,
             device,
             queue,
             kernel,
-            packet,
-            ray_query,
+            packet: OnceLock::new(),
+            ray_query: OnceLock::new(),
             start_time: Duration::ZERO,
         })
     }
@@ -284,21 +268,61 @@ impl Gpu {
     /// where the device has it and the scene is traced through the BVH (a scene tested
     /// primitive by primitive has no traversal to share), else the per-ray one. Both give
     /// the same image, bit for bit on lavapipe.
-    pub fn compute_kernel(&self, spec: crate::buffers::Specialisation) -> &Kernel {
-        match &self.packet {
+    pub fn compute_kernel(
+        &self,
+        spec: crate::buffers::Specialisation,
+    ) -> Result<&Kernel, GpuError> {
+        Ok(match self.packet_kernel()? {
             Some(p) if spec.use_bvh => p,
             _ => &self.kernel,
-        }
+        })
     }
 
-    /// The ray-query tracer's kernel, or the error that this device has none.
+    /// The packet traversal's kernel where the device has subgroups and `GLINT_TRAVERSAL`
+    /// is not `ray`, else `None`; its shader module is made on the first call, so a
+    /// process that never traverses a BVH on the GPU does not pay for it.
+    pub fn packet_kernel(&self) -> Result<Option<&Kernel>, GpuError> {
+        self.packet
+            .get_or_init(|| {
+                if self.device.features().contains(wgpu::Features::SUBGROUP)
+                    && std::env::var("GLINT_TRAVERSAL").as_deref() != Ok("ray")
+                {
+                    Kernel::new_packet(&self.device).map(Some)
+                } else {
+                    Ok(None)
+                }
+            })
+            .as_ref()
+            .map(Option::as_ref)
+            .map_err(Clone::clone)
+    }
+
+    /// Whether the device has ray queries (`Features::EXPERIMENTAL_RAY_QUERY`:
+    /// VK_KHR_ray_query and acceleration structures).
+    pub fn has_ray_query(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
+    }
+
+    /// The ray-query tracer's kernel (its shader module made on the first call), or the
+    /// error that this device has no ray queries.
     pub fn ray_query_kernel(&self) -> Result<&Kernel, GpuError> {
-        self.ray_query.as_ref().ok_or_else(|| GpuError::NoRayQuery {
-            adapter: format!(
-                "{} ({} {})",
-                self.info.name, self.info.driver, self.info.driver_info
-            ),
-        })
+        self.ray_query
+            .get_or_init(|| {
+                if self.has_ray_query() {
+                    Kernel::new_ray_query(&self.device)
+                } else {
+                    Err(GpuError::NoRayQuery {
+                        adapter: format!(
+                            "{} ({} {})",
+                            self.info.name, self.info.driver, self.info.driver_info
+                        ),
+                    })
+                }
+            })
+            .as_ref()
+            .map_err(Clone::clone)
     }
 
     /// A one-line description: name, type, driver.

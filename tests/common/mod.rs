@@ -199,6 +199,7 @@ pub fn buffers(
 /// the device has subgroups).
 pub fn render_gpu(gpu: &Gpu, buf: &SceneBuffers, spec: Specialisation) -> Image {
     gpu.compute_kernel(spec)
+        .expect("kernel")
         .render(&gpu.device, &gpu.queue, buf, spec, &mut |_, _| {})
         .expect("GPU render")
         .0
@@ -311,6 +312,7 @@ pub fn query_both(
     if let Some(gpu) = gpu() {
         let g = gpu
             .compute_kernel(spec)
+            .expect("kernel")
             .query(&gpu.device, &gpu.queue, buf, spec, rays)
             .expect("GPU query");
         let bad = g
