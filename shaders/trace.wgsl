@@ -432,17 +432,36 @@ fn hit_triangle(ray: Ray, sh: Shear, tri: Triangle, t_min: f32, t_max: f32) -> v
 
 // ---- the scene ---------------------------------------------------------------------------
 
+/// `best`, or the nearest sphere hit in (t_min, best.t) if there is one; the first sphere
+/// wins ties. Every sphere is tested (also by the ray-query tracer, `trace_rq.wgsl`).
+fn closest_sphere(ray: Ray, t_min: f32, best: Hit) -> Hit {
+    var b = best;
+    for (var k = 0u; k < params.n_spheres; k = k + 1u) {
+        let t = hit_sphere(ray, spheres[k], t_min, b.t);
+        if t < b.t {
+            b = Hit(t, k, 0.0, 0.0);
+        }
+    }
+    return b;
+}
+
+/// Whether a sphere other than primitive `skip` lies on the ray in (t_min, t_max), testing
+/// every sphere; stops at the first hit.
+fn sphere_blocks(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+    for (var k = 0u; k < params.n_spheres; k = k + 1u) {
+        if k != skip && hit_sphere(ray, spheres[k], t_min, t_max) < t_max {
+            return true;
+        }
+    }
+    return false;
+}
+
 /// The nearest hit in (t_min, t_max) over every sphere, then every triangle; the first
 /// primitive wins ties. `prim` is PRIM_NONE on a miss.
 fn closest_hit_all(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
     if HAS_SPHERES {
-        for (var k = 0u; k < params.n_spheres; k = k + 1u) {
-            let t = hit_sphere(ray, spheres[k], t_min, best.t);
-            if t < best.t {
-                best = Hit(t, k, 0.0, 0.0);
-            }
-        }
+        best = closest_sphere(ray, t_min, best);
     }
     if HAS_TRIANGLES {
         let sh = ray_shear(ray.dir);
@@ -459,12 +478,8 @@ fn closest_hit_all(ray: Ray, t_min: f32, t_max: f32) -> Hit {
 /// Whether anything but primitive `skip` lies on the ray in (t_min, t_max), testing every
 /// primitive; stops at the first hit.
 fn occluded_all(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
-    if HAS_SPHERES {
-        for (var k = 0u; k < params.n_spheres; k = k + 1u) {
-            if k != skip && hit_sphere(ray, spheres[k], t_min, t_max) < t_max {
-                return true;
-            }
-        }
+    if HAS_SPHERES && sphere_blocks(ray, t_min, t_max, skip) {
+        return true;
     }
     if HAS_TRIANGLES {
         let sh = ray_shear(ray.dir);

@@ -32,12 +32,7 @@ fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     let t_hi = finite_bound(t_max);
     var best = Hit(t_hi, PRIM_NONE, 0.0, 0.0);
     if HAS_SPHERES {
-        for (var k = 0u; k < params.n_spheres; k = k + 1u) {
-            let t = hit_sphere(ray, spheres[k], t_min, best.t);
-            if t < best.t {
-                best = Hit(t, k, 0.0, 0.0);
-            }
-        }
+        best = closest_sphere(ray, t_min, best);
     }
     if HAS_TRIANGLES && ray_query_valid(ray, t_min, best.t) {
         var rq: ray_query;
@@ -56,12 +51,8 @@ fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
 /// but `skip` (and any outside the open interval) is accepted.
 fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
     let t_hi = finite_bound(t_max);
-    if HAS_SPHERES {
-        for (var k = 0u; k < params.n_spheres; k = k + 1u) {
-            if k != skip && hit_sphere(ray, spheres[k], t_min, t_hi) < t_hi {
-                return true;
-            }
-        }
+    if HAS_SPHERES && sphere_blocks(ray, t_min, t_hi, skip) {
+        return true;
     }
     if HAS_TRIANGLES && ray_query_valid(ray, t_min, t_hi) {
         var rq: ray_query;

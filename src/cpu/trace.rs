@@ -425,6 +425,35 @@ pub fn hit_triangle<R: Real>(
 
 // ---- the scene ---------------------------------------------------------------------------
 
+/// WGSL `closest_sphere`: `best`, or the nearest sphere hit in (t_min, best.t); the first
+/// sphere wins ties.
+pub fn closest_sphere<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, best: Hit<R>) -> Hit<R> {
+    let mut b = best;
+    for k in 0..g.buf.params.n_spheres {
+        let t = hit_sphere(ray, &g.buf.spheres[k as usize], t_min, b.t);
+        if t < b.t {
+            b = Hit {
+                t,
+                prim: k,
+                u: R::ZERO,
+                v: R::ZERO,
+            };
+        }
+    }
+    b
+}
+
+/// WGSL `sphere_blocks`: whether a sphere other than `skip` lies on the ray in (t_min,
+/// t_max); stops at the first hit.
+pub fn sphere_blocks<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+    for k in 0..g.buf.params.n_spheres {
+        if k != skip && hit_sphere(ray, &g.buf.spheres[k as usize], t_min, t_max) < t_max {
+            return true;
+        }
+    }
+    false
+}
+
 /// WGSL `closest_hit_all`: the nearest hit in (t_min, t_max), spheres first; the first
 /// primitive wins ties.
 pub fn closest_hit_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
@@ -435,17 +464,7 @@ pub fn closest_hit_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
         v: R::ZERO,
     };
     if g.spec.has_spheres {
-        for k in 0..g.buf.params.n_spheres {
-            let t = hit_sphere(ray, &g.buf.spheres[k as usize], t_min, best.t);
-            if t < best.t {
-                best = Hit {
-                    t,
-                    prim: k,
-                    u: R::ZERO,
-                    v: R::ZERO,
-                };
-            }
-        }
+        best = closest_sphere(g, ray, t_min, best);
     }
     if g.spec.has_triangles {
         let sh = ray_shear(g, ray.dir);
@@ -466,12 +485,8 @@ pub fn closest_hit_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
 
 /// WGSL `occluded_all`: whether anything but `skip` lies on the ray, testing every primitive.
 pub fn occluded_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
-    if g.spec.has_spheres {
-        for k in 0..g.buf.params.n_spheres {
-            if k != skip && hit_sphere(ray, &g.buf.spheres[k as usize], t_min, t_max) < t_max {
-                return true;
-            }
-        }
+    if g.spec.has_spheres && sphere_blocks(g, ray, t_min, t_max, skip) {
+        return true;
     }
     if g.spec.has_triangles {
         let sh = ray_shear(g, ray.dir);
