@@ -165,7 +165,7 @@ impl SceneBuffers {
         algo: TriangleAlgorithm,
         shadows: bool,
     ) -> Self {
-        let bvh = crate::stages::time("BVH build", || Bvh::build(&spheres, &triangles));
+        let bvh = cached_bvh(&spheres, &triangles);
         let t_flat = std::time::Instant::now();
         let leaf_triangles: Vec<Triangle> = bvh
             .prim_ids
@@ -284,4 +284,44 @@ impl Specialisation {
             ("ANTIALIAS", b(self.antialias)),
         ]
     }
+}
+
+/// The BVH over `spheres` and `triangles`: from the cache when it holds this scene's tree
+/// (keyed by the primitives' bytes, see [`crate::cache`]), else built (and stored, when the
+/// scene is large enough to be worth it).
+fn cached_bvh(spheres: &[Sphere], triangles: &[Triangle]) -> Bvh {
+    let n = spheres.len() + triangles.len();
+    if !crate::cache::worth(n) {
+        return crate::stages::time("BVH build", || Bvh::build(spheres, triangles));
+    }
+    let key = crate::cache::Key::new(
+        "bvh",
+        &[
+            bytemuck::cast_slice(spheres),
+            bytemuck::cast_slice(triangles),
+        ],
+    );
+    let hit = crate::stages::time("cache read", || {
+        let mut s = crate::cache::load("bvh", &key)?.into_iter();
+        let (nodes, prim_ids, stats) = (s.next()?, s.next()?, s.next()?);
+        Some(Bvh {
+            nodes: crate::cache::section_as(nodes),
+            prim_ids,
+            depth: *stats.first()? as usize,
+            largest_leaf: *stats.get(1)? as usize,
+        })
+    });
+    if let Some(bvh) = hit.filter(|b| b.prim_ids.len() == n) {
+        return bvh;
+    }
+    let bvh = crate::stages::time("BVH build", || Bvh::build(spheres, triangles));
+    crate::stages::time("cache write", || {
+        let stats = [bvh.depth as u32, bvh.largest_leaf as u32];
+        crate::cache::store(
+            "bvh",
+            &key,
+            &[bytemuck::cast_slice(&bvh.nodes), &bvh.prim_ids, &stats],
+        )
+    });
+    bvh
 }

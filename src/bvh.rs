@@ -694,7 +694,11 @@ mod tests {
             .map(|k| {
                 let c = [rnd() * 10.0, rnd() * 10.0, rnd() * 2.0];
                 let s = if k % 7 == 0 { 1.0 } else { 0.02 };
-                tri(c, [c[0] + s * rnd(), c[1], c[2] + s * rnd()], [c[0], c[1] + s, c[2]])
+                tri(
+                    c,
+                    [c[0] + s * rnd(), c[1], c[2] + s * rnd()],
+                    [c[0], c[1] + s, c[2]],
+                )
             })
             .collect();
         tris.extend(vec![tri([5.0; 3], [5.1, 5.0, 5.0], [5.0, 5.1, 5.0]); 40]);
@@ -710,7 +714,10 @@ mod tests {
         assert_eq!(tree_hash(&bvh), 0x5307_5bc9_6948_79cf);
         // The twin: one vertex one ULP away moves a box, and the hash sees it.
         tris[123].b[0] = f32::from_bits(tris[123].b[0].to_bits() + 1);
-        assert_ne!(tree_hash(&Bvh::build(&spheres, &tris)), 0x5307_5bc9_6948_79cf);
+        assert_ne!(
+            tree_hash(&Bvh::build(&spheres, &tris)),
+            0x5307_5bc9_6948_79cf
+        );
     }
 
     #[test]

@@ -19,6 +19,7 @@
 pub mod bench;
 pub mod buffers;
 pub mod bvh;
+pub mod cache;
 pub mod compare;
 pub mod cpu;
 #[doc(hidden)]

@@ -93,6 +93,10 @@ enum Command {
         /// Which tracer.
         #[arg(long, value_enum, default_value = "auto")]
         backend: Backend,
+        /// Neither read nor write the cache of large meshes and BVHs (kept in
+        /// GLINT_CACHE_DIR, else $XDG_CACHE_HOME/glint or ~/.cache/glint).
+        #[arg(long)]
+        no_cache: bool,
         #[command(flatten)]
         frame: FrameArgs,
         #[command(flatten)]
@@ -328,6 +332,7 @@ fn run(cli: Cli) -> Result<()> {
             output,
             verbose,
             backend,
+            no_cache,
             frame:
                 FrameArgs {
                     size,
@@ -336,6 +341,9 @@ fn run(cli: Cli) -> Result<()> {
                 },
             common: CommonArgs { adapter, confine },
         } => {
+            if let Some(dir) = glint::cache::default_dir().filter(|_| !no_cache) {
+                glint::cache::enable(dir);
+            }
             if same_file(&scene, &output) {
                 bail!(
                     "{}: the output would overwrite the scene file",
@@ -364,6 +372,13 @@ fn run(cli: Cli) -> Result<()> {
                 },
             )?;
             let buf = SceneBuffers::new(&s, w, h, algo);
+            for e in glint::cache::take_events() {
+                if e.starts_with("warning") {
+                    eprintln!("{e}");
+                } else if verbose {
+                    eprintln!("cache: {e}");
+                }
+            }
             let spec = Specialisation::for_scene(&buf);
             let renderer = glint::Renderer::with_adapter(backend.into(), adapter.as_deref())?;
             if let Some(note) = renderer.note() {

@@ -162,7 +162,61 @@ pub(super) fn load(
         mesh: obj_path.clone(),
         message,
     };
-    let mut bytes = read_mesh_bytes(v, &obj_path).map_err(&fail)?;
+    let raw = crate::stages::time("read", || (v.read)(&obj_path)).map_err(&fail)?;
+    let xf = mesh_transform(v, i, m)?;
+    // A large mesh placed by glint's own reader may be in the cache (see `crate::cache`):
+    // its key is the file's bytes, the transform and how normals are read.
+    let cache_key = m.material.as_ref().map(|_| {
+        let xf_bits: Vec<u8> = [xf.scale.to_array(), xf.translate.to_array()]
+            .into_iter()
+            .flatten()
+            .chain(xf.rot.to_cols_array())
+            .flat_map(f64::to_le_bytes)
+            .collect();
+        let settings = [
+            (normals == Normals::Read) as u8,
+            obj_path.extension().is_some_and(|e| e == "gz") as u8,
+        ];
+        crate::cache::Key::new(
+            "mesh",
+            &[
+                &raw,
+                &xf_bits,
+                &settings,
+                &super::max_input_bytes().to_le_bytes(),
+            ],
+        )
+    });
+    if let (Some(name), Some(ckey)) = (&m.material, &cache_key) {
+        if let Some(entry) = crate::stages::time("cache read", || CachedMesh::load(ckey)) {
+            drop(raw);
+            let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
+            let material = v.material_index(&names, name, &format!("meshes[{i}].material"))?;
+            if let Some(first) = entry.first_short_face {
+                warnings.push(format!(
+                    "{}:{line}: {key}: {}: {}",
+                    v.path.display(),
+                    obj_path.display(),
+                    short_face_warning(entry.short_faces, first)
+                ));
+            }
+            if let Some(normals) = entry.normals {
+                smooth.push(SmoothNormals {
+                    first: triangles.len(),
+                    normals,
+                });
+            }
+            let before = triangles.len();
+            triangles.extend(
+                entry
+                    .vertices
+                    .into_iter()
+                    .map(|vertices| Triangle { vertices, material }),
+            );
+            return finish(v, line, &key, &triangles[before..], &fail, warnings);
+        }
+    }
+    let mut bytes = gunzip(&obj_path, raw).map_err(&fail)?;
     let t_check = std::time::Instant::now();
     // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
     // first line as an unknown keyword.
@@ -179,7 +233,6 @@ pub(super) fn load(
             )));
         }
     };
-    let xf = mesh_transform(v, i, m)?;
     // glint's own parallel reader when the scene names the material and the OBJ holds only
     // positions and faces (tobj otherwise).
     if let Some(name) = &m.material {
@@ -219,13 +272,24 @@ pub(super) fn load(
                     .collect::<Result<_, _>>()?
             };
             crate::stages::record("transform", t.elapsed());
-            if normals == Normals::Read {
+            let corner = if normals == Normals::Read {
                 let t = std::time::Instant::now();
+                let n = corner_normals(&parsed, &xf).map_err(&fail)?;
+                crate::stages::record("normals", t.elapsed());
+                Some(n)
+            } else {
+                None
+            };
+            if let Some(ckey) = cache_key.filter(|_| crate::cache::worth(placed.len())) {
+                crate::stages::time("cache write", || {
+                    CachedMesh::store(&ckey, &placed, corner.as_deref(), &parsed.short_faces)
+                });
+            }
+            if let Some(normals) = corner {
                 smooth.push(SmoothNormals {
                     first: triangles.len(),
-                    normals: corner_normals(&parsed, &xf).map_err(&fail)?,
+                    normals,
                 });
-                crate::stages::record("normals", t.elapsed());
             }
             let before = triangles.len();
             triangles.extend(placed);
@@ -471,9 +535,49 @@ fn short_colour_line(mtl: &[u8]) -> Option<usize> {
         .map(|k| k + 1)
 }
 
-/// The bytes of an OBJ file, gunzipped when the name ends in `.gz`.
-fn read_mesh_bytes(v: &Validator<'_>, path: &Path) -> Result<Vec<u8>, String> {
-    let raw = crate::stages::time("read", || (v.read)(path))?;
+/// What the cache holds for a mesh read by glint's own reader: its triangles as placed,
+/// their corner normals when smooth, and its short faces (for the warning).
+struct CachedMesh {
+    vertices: Vec<[[f32; 3]; 3]>,
+    normals: Option<Vec<[[f32; 3]; 3]>>,
+    short_faces: usize,
+    first_short_face: Option<usize>,
+}
+
+impl CachedMesh {
+    fn load(key: &crate::cache::Key) -> Option<CachedMesh> {
+        let mut s = crate::cache::load("mesh", key)?.into_iter();
+        let (vertices, normals, short) = (s.next()?, s.next()?, s.next()?);
+        let (short_faces, first) = (*short.first()? as usize, *short.get(1)? as usize);
+        Some(CachedMesh {
+            vertices: crate::cache::section_as(vertices),
+            normals: (!normals.is_empty()).then(|| crate::cache::section_as(normals)),
+            short_faces,
+            first_short_face: (short_faces > 0).then_some(first),
+        })
+    }
+
+    fn store(
+        key: &crate::cache::Key,
+        placed: &[Triangle],
+        normals: Option<&[[[f32; 3]; 3]]>,
+        short_faces: &[usize],
+    ) {
+        let vertices: Vec<u32> = placed
+            .iter()
+            .flat_map(|t| t.vertices.into_iter().flatten().map(f32::to_bits))
+            .collect();
+        let short = [
+            short_faces.len() as u32,
+            short_faces.first().copied().unwrap_or(0) as u32,
+        ];
+        let normals: &[u32] = normals.map_or(&[], |n| bytemuck::cast_slice(n));
+        crate::cache::store("mesh", key, &[&vertices, normals, &short]);
+    }
+}
+
+/// The bytes of an OBJ file as read (`raw`), gunzipped when the name ends in `.gz`.
+fn gunzip(path: &Path, raw: Vec<u8>) -> Result<Vec<u8>, String> {
     let _gunzip = Gunzip(std::time::Instant::now());
     if path.extension().is_some_and(|e| e == "gz") {
         use std::io::Read;
@@ -494,7 +598,7 @@ fn read_mesh_bytes(v: &Validator<'_>, path: &Path) -> Result<Vec<u8>, String> {
     Ok(raw)
 }
 
-/// Records the gunzip stage when dropped (at every return of `read_mesh_bytes`).
+/// Records the gunzip stage when dropped (at every return of `gunzip`).
 struct Gunzip(std::time::Instant);
 
 impl Drop for Gunzip {

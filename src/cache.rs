@@ -1,0 +1,334 @@
+//! A cache of derived geometry on disk: a large mesh as placed in the scene, and a large
+//! scene's BVH, so that a render that changes only the lights, the camera or the materials
+//! skips the gunzip, the parse, the transform and the build.
+//!
+//! Off unless the program turns it on ([`enable`]; `glint render` does, `--no-cache` skips
+//! it), so the library never writes to a user's folders by itself. An entry's key is an
+//! XXH3-128 hash of everything its value is made from: the input bytes and settings, and
+//! the source of the code that makes the value ([`CODE`]), so a new glint never reads an
+//! old glint's entry. An entry carries an XXH3-64 checksum of its payload; an entry that
+//! fails it, or is cut short, or names another key, is deleted and rebuilt, with one
+//! warning. Entries are written to a temporary name and renamed into place, so a reader
+//! never sees half of one, and the folder is kept under a size limit (oldest entries go
+//! first). Imports nothing from glint.
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// The source of the code whose output is cached, hashed into every key.
+const CODE: &[&[u8]] = &[
+    include_bytes!("cache.rs"),
+    include_bytes!("bvh.rs"),
+    include_bytes!("kernel/layout.rs"),
+    include_bytes!("scene/mesh.rs"),
+    include_bytes!("scene/obj.rs"),
+];
+
+/// First bytes of every entry (the last one is the format's version).
+const MAGIC: &[u8; 8] = b"glintc\0\x01";
+
+/// Default size limit of the folder, MiB (`GLINT_CACHE_MIB` changes it).
+const DEFAULT_MIB: u64 = 2048;
+
+/// Default least number of primitives worth an entry (`GLINT_CACHE_MIN_PRIMS` changes it):
+/// below it, the work takes a few milliseconds and an entry would only take disk.
+const DEFAULT_MIN_PRIMS: usize = 100_000;
+
+/// The folder, once [`enable`]d.
+static DIR: Mutex<Option<PathBuf>> = Mutex::new(None);
+
+/// What the cache did during this process, for `glint render -v` and the tests.
+static EVENTS: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+/// The key of an entry: a hash of its inputs and of [`CODE`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Key(u128);
+
+impl Key {
+    /// The key of a value of `kind` (e.g. "mesh", "bvh") made from `parts`.
+    pub fn new(kind: &str, parts: &[&[u8]]) -> Key {
+        let mut h = xxhash_rust::xxh3::Xxh3::new();
+        for c in CODE {
+            h.update(&(c.len() as u64).to_le_bytes());
+            h.update(c);
+        }
+        h.update(kind.as_bytes());
+        for p in parts {
+            // Lengths first, so ("ab", "c") and ("a", "bc") differ.
+            h.update(&(p.len() as u64).to_le_bytes());
+            h.update(p);
+        }
+        Key(h.digest128())
+    }
+
+    fn file_name(&self) -> String {
+        format!("{:032x}.bin", self.0)
+    }
+}
+
+/// The folder the cache would use: `GLINT_CACHE_DIR`, else `$XDG_CACHE_HOME/glint`, else
+/// `$HOME/.cache/glint`; `None` when none of them is set.
+pub fn default_dir() -> Option<PathBuf> {
+    let var = |k: &str| {
+        std::env::var_os(k)
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+    };
+    var("GLINT_CACHE_DIR")
+        .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("glint")))
+        .or_else(|| var("HOME").map(|d| d.join(".cache").join("glint")))
+}
+
+/// Turns the cache on, in `dir`.
+pub fn enable(dir: PathBuf) {
+    *DIR.lock().unwrap_or_else(|e| e.into_inner()) = Some(dir);
+}
+
+/// Turns the cache off.
+pub fn disable() {
+    *DIR.lock().unwrap_or_else(|e| e.into_inner()) = None;
+}
+
+/// Whether a value made from `primitives` primitives is worth an entry (the cache is on
+/// and the count reaches `GLINT_CACHE_MIN_PRIMS`, default 100,000).
+pub fn worth(primitives: usize) -> bool {
+    let min = std::env::var("GLINT_CACHE_MIN_PRIMS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(DEFAULT_MIN_PRIMS);
+    dir().is_some() && primitives >= min
+}
+
+/// What the cache did so far in this process ("hit mesh", "stored bvh", warnings), and
+/// forgets it.
+pub fn take_events() -> Vec<String> {
+    std::mem::take(&mut *EVENTS.lock().unwrap_or_else(|e| e.into_inner()))
+}
+
+fn event(e: String) {
+    EVENTS.lock().unwrap_or_else(|e| e.into_inner()).push(e);
+}
+
+fn dir() -> Option<PathBuf> {
+    DIR.lock().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+/// The entry of `key`, as the sections it was stored with; `None` when the cache is off,
+/// the entry is missing, or it is damaged (then it is deleted, and a warning recorded).
+pub fn load(kind: &str, key: &Key) -> Option<Vec<Vec<u32>>> {
+    let path = dir()?.join(key.file_name());
+    let mut file = std::fs::File::open(&path).ok()?;
+    match read_entry(&mut file, key) {
+        Ok(sections) => {
+            // Touched, so the size limit drops the entries least recently used.
+            let _ = file.set_modified(std::time::SystemTime::now());
+            event(format!("hit {kind}"));
+            Some(sections)
+        }
+        Err(why) => {
+            drop(file);
+            let _ = std::fs::remove_file(&path);
+            event(format!(
+                "warning: cache entry {} was damaged ({why}); deleted, and the {kind} rebuilt",
+                path.display()
+            ));
+            None
+        }
+    }
+}
+
+fn read_entry(file: &mut std::fs::File, key: &Key) -> Result<Vec<Vec<u32>>, String> {
+    let mut head = [0u8; 8 + 16 + 8 + 4];
+    file.read_exact(&mut head)
+        .map_err(|_| "shorter than its header")?;
+    if &head[..8] != MAGIC {
+        return Err("not a glint cache entry of this format".into());
+    }
+    if head[8..24] != key.0.to_le_bytes() {
+        return Err("it holds another key".into());
+    }
+    let sum = u64::from_le_bytes(head[24..32].try_into().expect("8 bytes"));
+    let n = u32::from_le_bytes(head[32..36].try_into().expect("4 bytes")) as usize;
+    if n > 64 {
+        return Err(format!("{n} sections"));
+    }
+    let mut lens = vec![0u8; 8 * n];
+    file.read_exact(&mut lens).map_err(|_| "cut short")?;
+    let total: u64 = lens
+        .chunks_exact(8)
+        .map(|c| u64::from_le_bytes(c.try_into().expect("8 bytes")))
+        .try_fold(0u64, |a, l| a.checked_add(l))
+        .ok_or("section lengths overflow")?;
+    let size = file.metadata().map_err(|e| e.to_string())?.len();
+    if total.checked_mul(4).is_none_or(|b| b > size) {
+        return Err("cut short".into());
+    }
+    let mut h = xxhash_rust::xxh3::Xxh3::new();
+    let mut sections = Vec::with_capacity(n);
+    for c in lens.chunks_exact(8) {
+        let len = u64::from_le_bytes(c.try_into().expect("8 bytes")) as usize;
+        let mut words = vec![0u32; len];
+        file.read_exact(bytemuck::cast_slice_mut(&mut words))
+            .map_err(|_| "cut short")?;
+        h.update(bytemuck::cast_slice(&words));
+        sections.push(words);
+    }
+    if file.read(&mut [0u8; 1]).map_err(|e| e.to_string())? != 0 {
+        return Err("longer than its sections".into());
+    }
+    if h.digest() != sum {
+        return Err("checksum mismatch".into());
+    }
+    Ok(sections)
+}
+
+/// Stores `sections` under `key` (nothing when the cache is off). A failure to write is
+/// recorded as a warning and otherwise ignored: the render goes on without the entry.
+pub fn store(kind: &str, key: &Key, sections: &[&[u32]]) {
+    let Some(dir) = dir() else { return };
+    match write_entry(&dir, key, sections) {
+        Ok(()) => {
+            event(format!("stored {kind}"));
+            prune(&dir, limit_bytes());
+        }
+        Err(e) => event(format!(
+            "warning: cannot write the {kind} cache entry in {}: {e}",
+            dir.display()
+        )),
+    }
+}
+
+fn write_entry(dir: &Path, key: &Key, sections: &[&[u32]]) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let mut h = xxhash_rust::xxh3::Xxh3::new();
+    for s in sections {
+        h.update(bytemuck::cast_slice(s));
+    }
+    let tmp = dir.join(format!("{}.{}.tmp", key.file_name(), std::process::id()));
+    let result = (|| {
+        let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        f.write_all(MAGIC)?;
+        f.write_all(&key.0.to_le_bytes())?;
+        f.write_all(&h.digest().to_le_bytes())?;
+        f.write_all(&(sections.len() as u32).to_le_bytes())?;
+        for s in sections {
+            f.write_all(&(s.len() as u64).to_le_bytes())?;
+        }
+        for s in sections {
+            f.write_all(bytemuck::cast_slice(s))?;
+        }
+        // Not synced to disk: an entry that a crash leaves half written fails its
+        // checksum on the next read and is rebuilt, and syncing 60 MB costs a third of a
+        // second.
+        f.flush()?;
+        drop(f);
+        std::fs::rename(&tmp, dir.join(key.file_name()))
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// The folder's size limit: `GLINT_CACHE_MIB` (default 2048) MiB.
+fn limit_bytes() -> u64 {
+    std::env::var("GLINT_CACHE_MIB")
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+        .unwrap_or(DEFAULT_MIB)
+        << 20
+}
+
+/// Deletes the least recently used entries while the folder's entries exceed `limit`
+/// bytes.
+fn prune(dir: &Path, limit: u64) {
+    let Ok(read) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut entries: Vec<(std::time::SystemTime, u64, PathBuf)> = read
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".bin"))
+        .filter_map(|e| {
+            let m = e.metadata().ok()?;
+            Some((m.modified().ok()?, m.len(), e.path()))
+        })
+        .collect();
+    let mut total: u64 = entries.iter().map(|e| e.1).sum();
+    entries.sort();
+    for (_, len, path) in entries {
+        if total <= limit {
+            break;
+        }
+        if std::fs::remove_file(&path).is_ok() {
+            total -= len;
+            event(format!("evicted {}", path.display()));
+        }
+    }
+}
+
+/// Reinterprets a section as a vector of `T` (copying only if its size does not divide).
+pub fn section_as<T: bytemuck::Pod>(words: Vec<u32>) -> Vec<T> {
+    bytemuck::try_cast_vec(words).unwrap_or_else(|(_, w)| bytemuck::pod_collect_to_vec(&w))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The tests here share the process-wide folder, so they run as one test.
+    #[test]
+    fn entries_round_trip_and_damage_is_caught() {
+        let dir = std::env::temp_dir().join(format!("glint-cache-unit-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        enable(dir.clone());
+        let key = Key::new("test", &[b"abc"]);
+        assert_ne!(key, Key::new("test", &[b"abd"]), "the key sees its input");
+        assert_ne!(key, Key::new("test", &[b"ab", b"c"]), "parts are delimited");
+        assert!(load("test", &key).is_none());
+        let a: Vec<u32> = (0..1000).collect();
+        let b: Vec<u32> = vec![7; 3];
+        store("test", &key, &[&a, &b]);
+        assert_eq!(load("test", &key), Some(vec![a.clone(), b.clone()]));
+
+        // One flipped bit in the payload, a cut, another key's entry: each is caught, the
+        // entry deleted, and a warning recorded.
+        let path = dir.join(key.file_name());
+        let good = std::fs::read(&path).unwrap();
+        let mut flipped = good.clone();
+        *flipped.last_mut().unwrap() ^= 1;
+        let other = Key::new("test", &[b"xyz"]);
+        for (bad, why) in [
+            (flipped, "checksum"),
+            (good[..good.len() - 4].to_vec(), "cut short"),
+            (good[..20].to_vec(), "header"),
+        ] {
+            take_events();
+            std::fs::write(&path, &bad).unwrap();
+            assert!(load("test", &key).is_none(), "{why}");
+            assert!(!path.exists());
+            let events = take_events();
+            assert!(events.iter().any(|e| e.contains(why)), "{why}: {events:?}");
+        }
+        std::fs::write(dir.join(other.file_name()), &good).unwrap();
+        assert!(load("test", &other).is_none(), "a renamed entry is refused");
+
+        // The size limit drops the least recently used entries first.
+        store("test", &key, &[&a]);
+        store("test", &other, &[&b]);
+        let old = std::time::SystemTime::now() - std::time::Duration::from_secs(60);
+        let f = std::fs::File::options().write(true).open(&path).unwrap();
+        f.set_modified(old).unwrap();
+        prune(
+            &dir,
+            std::fs::metadata(dir.join(other.file_name()))
+                .unwrap()
+                .len(),
+        );
+        assert!(!path.exists(), "the older entry goes");
+        assert!(dir.join(other.file_name()).exists(), "the newer stays");
+        disable();
+        assert!(load("test", &key).is_none());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
