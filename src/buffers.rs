@@ -57,6 +57,39 @@ pub fn camera_basis(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> [[f32; 3]
 impl SceneBuffers {
     /// Flattens a validated scene at `width`×`height` pixels with the given triangle algorithm.
     pub fn new(scene: &Scene, width: u32, height: u32, algo: TriangleAlgorithm) -> Self {
+        let (triangles, normals) = flat_triangles(&scene.triangles, &scene.smooth);
+        Self::with_triangles(scene, triangles, normals, width, height, algo)
+    }
+
+    /// [`SceneBuffers::new`] for a scene that is not needed afterwards: its triangles (and
+    /// smooth normals) are taken, and freed as soon as they are flattened, before the BVH
+    /// is built, so the scene's copy of a large mesh and the builder's work are never in
+    /// memory at once. The rest of `scene` is left as it was.
+    pub fn from_scene_taking(
+        scene: &mut Scene,
+        width: u32,
+        height: u32,
+        algo: TriangleAlgorithm,
+    ) -> Self {
+        let (scene_triangles, smooth) = (
+            std::mem::take(&mut scene.triangles),
+            std::mem::take(&mut scene.smooth),
+        );
+        let (triangles, normals) = flat_triangles(&scene_triangles, &smooth);
+        drop((scene_triangles, smooth));
+        Self::with_triangles(scene, triangles, normals, width, height, algo)
+    }
+
+    /// The buffers of `scene` whose triangles (and normals) are already flat.
+    fn with_triangles(
+        scene: &Scene,
+        triangles: Vec<Triangle>,
+        normals: Vec<VertexNormals>,
+        width: u32,
+        height: u32,
+        algo: TriangleAlgorithm,
+    ) -> Self {
+        let t_flat = std::time::Instant::now();
         let cam = &scene.camera;
         let [forward, right, up] = camera_basis(cam.eye, cam.look_at, cam.up);
         let params = Params {
@@ -103,33 +136,6 @@ impl SceneBuffers {
                 ..Sphere::default()
             })
             .collect();
-        let mut triangles: Vec<Triangle> = scene
-            .triangles
-            .iter()
-            .map(|t| Triangle {
-                a: t.vertices[0],
-                material: t.material,
-                b: t.vertices[1],
-                c: t.vertices[2],
-                ..Triangle::default()
-            })
-            .collect();
-        // Entry 0 stands for "flat"; each smooth triangle names its own entry.
-        let mut normals = Vec::new();
-        for mesh in &scene.smooth {
-            if normals.is_empty() {
-                normals.push(VertexNormals::default());
-            }
-            for (k, n) in mesh.normals.iter().enumerate() {
-                triangles[mesh.first + k].normals = normals.len() as u32;
-                normals.push(VertexNormals {
-                    na: n[0],
-                    nb: n[1],
-                    nc: n[2],
-                    ..VertexNormals::default()
-                });
-            }
-        }
         let lights = scene
             .lights
             .iter()
@@ -139,6 +145,7 @@ impl SceneBuffers {
                 ..Light::default()
             })
             .collect();
+        crate::stages::record("flatten", t_flat.elapsed());
         SceneBuffers {
             normals,
             ..SceneBuffers::assemble(
@@ -324,4 +331,41 @@ fn cached_bvh(spheres: &[Sphere], triangles: &[Triangle]) -> Bvh {
         )
     });
     bvh
+}
+
+/// The scene's triangles as the shader's, and the vertex normals they name (entry 0 stands
+/// for "flat"; empty when no mesh is smooth).
+fn flat_triangles(
+    scene_triangles: &[crate::scene::Triangle],
+    smooth: &[crate::scene::SmoothNormals],
+) -> (Vec<Triangle>, Vec<VertexNormals>) {
+    crate::stages::time("flatten", || {
+        let mut triangles: Vec<Triangle> = scene_triangles
+            .iter()
+            .map(|t| Triangle {
+                a: t.vertices[0],
+                material: t.material,
+                b: t.vertices[1],
+                c: t.vertices[2],
+                ..Triangle::default()
+            })
+            .collect();
+        // Entry 0 stands for "flat"; each smooth triangle names its own entry.
+        let mut normals = Vec::new();
+        for mesh in smooth {
+            if normals.is_empty() {
+                normals.push(VertexNormals::default());
+            }
+            for (k, n) in mesh.normals.iter().enumerate() {
+                triangles[mesh.first + k].normals = normals.len() as u32;
+                normals.push(VertexNormals {
+                    na: n[0],
+                    nb: n[1],
+                    nc: n[2],
+                    ..VertexNormals::default()
+                });
+            }
+        }
+        (triangles, normals)
+    })
 }

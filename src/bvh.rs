@@ -170,6 +170,16 @@ enum Part {
     },
 }
 
+impl Part {
+    /// Nodes in this part.
+    fn nodes(&self) -> usize {
+        match self {
+            Part::Flat { nodes, .. } => nodes.len(),
+            Part::Split { children, .. } => 1 + children.0.nodes() + children.1.nodes(),
+        }
+    }
+}
+
 impl Bvh {
     /// Builds the tree over `spheres` (ids `0..`) and `triangles` (ids `TRIANGLE_BIT | k`).
     ///
@@ -202,8 +212,10 @@ impl Bvh {
         };
         // The references are done with before the flat tree is written: not both at once.
         drop(refs);
+        // Reserved exactly: each part is freed as it is copied in, so the parts and the
+        // tree are never both whole in memory.
+        bvh.nodes.reserve_exact(root.nodes());
         flatten(root, 0, &mut bvh);
-        bvh.nodes.shrink_to_fit();
         bvh
     }
 }
@@ -391,7 +403,9 @@ fn best_split(refs: &[PrimRef], lo: Vec4, scale: Vec4) -> Option<(f32, usize, us
 fn build_part(refs: &mut [PrimRef], node: Bounds, offset: usize, depth: usize) -> Part {
     let n = refs.len();
     if n < PARALLEL_MIN {
-        let mut nodes = Vec::with_capacity(n);
+        // At most 2n - 1 nodes: reserved whole, so the vector never doubles (pages that
+        // are never written are never resident).
+        let mut nodes = Vec::with_capacity(2 * n - 1);
         let (mut deepest, mut largest) = (0, 0);
         let mut out = Flat {
             nodes: &mut nodes,

@@ -563,10 +563,12 @@ impl CachedMesh {
         normals: Option<&[[[f32; 3]; 3]]>,
         short_faces: &[usize],
     ) {
-        let vertices: Vec<u32> = placed
-            .iter()
-            .flat_map(|t| t.vertices.into_iter().flatten().map(f32::to_bits))
-            .collect();
+        let mut vertices: Vec<u32> = Vec::with_capacity(placed.len() * 9);
+        for t in placed {
+            for v in t.vertices {
+                vertices.extend(v.map(f32::to_bits));
+            }
+        }
         let short = [
             short_faces.len() as u32,
             short_faces.first().copied().unwrap_or(0) as u32,

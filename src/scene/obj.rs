@@ -39,8 +39,13 @@ pub enum Normals {
 }
 
 /// One triangle of a chunk: raw position indices, the positions the chunk defined before
-/// it, its line within the chunk, raw normal indices (0: none) and the normals before it.
-type RawFace = ([i64; 3], u32, u32, [i64; 3], u32);
+/// it and its line within the chunk (32 bytes: a mesh's faces are the reader's largest
+/// working set).
+type RawFace = ([i64; 3], u32, u32);
+
+/// A triangle's raw normal indices (0: none) and the normals the chunk defined before it;
+/// kept only when normals are read.
+type RawNormals = ([i64; 3], u32);
 
 /// A chunk's result: its vertices (and normals), and its triangles.
 #[derive(Default)]
@@ -48,6 +53,8 @@ struct Chunk {
     vertices: Vec<[f32; 3]>,
     normals: Vec<[f32; 3]>,
     faces: Vec<RawFace>,
+    /// Per face, when normals are read.
+    face_normals: Vec<RawNormals>,
     short_faces: Vec<u32>,
     lines: u32,
 }
@@ -119,8 +126,7 @@ fn parse_with(text: &str, strict: bool, normals: Normals) -> Result<Option<Parse
         let k = if i > 0 { i - 1 } else { defined + i };
         (i != 0 && k >= 0 && k < defined).then_some(k as u32)
     };
-    let resolve = |(ix, before, line, nix, nbefore): &RawFace,
-                   (l0, v0, n0): (u32, usize, usize)| {
+    let resolve = |(ix, before, line): &RawFace, (l0, v0, _): (u32, usize, usize)| {
         let defined = v0 as i64 + *before as i64;
         let mut out = [0u32; 3];
         for (slot, &i) in out.iter_mut().zip(ix) {
@@ -131,36 +137,68 @@ fn parse_with(text: &str, strict: bool, normals: Normals) -> Result<Option<Parse
                 )
             })?;
         }
+        Ok(out)
+    };
+    let resolve_normals = |(nix, nbefore): &RawNormals,
+                           line: u32,
+                           (l0, _, n0): (u32, usize, usize)| {
         let n_defined = n0 as i64 + *nbefore as i64;
         let mut nout = [NO_NORMAL; 3];
-        if normals == Normals::Read {
-            for (slot, &i) in nout.iter_mut().zip(nix) {
-                if i != 0 {
-                    *slot = index(i, n_defined).ok_or_else(|| {
-                        format!(
-                            "line {}: face normal index {i} is out of range ({n_defined} normals (`vn`) defined before it)",
-                            l0 + line
-                        )
-                    })?;
-                }
+        for (slot, &i) in nout.iter_mut().zip(nix) {
+            if i != 0 {
+                *slot = index(i, n_defined).ok_or_else(|| {
+                    format!(
+                        "line {}: face normal index {i} is out of range ({n_defined} normals (`vn`) defined before it)",
+                        l0 + line
+                    )
+                })?;
             }
         }
-        Ok((out, nout))
+        Ok(nout)
     };
-    let resolved = done
-        .par_iter()
-        .map(|(c, off)| {
-            c.faces
-                .iter()
-                .map(|f| resolve(f, *off))
-                .collect::<Result<Vec<_>, String>>()
-        })
-        .collect::<Result<Vec<Vec<_>>, String>>()?
-        .concat();
-    let (triangles, normal_ix): (Vec<[u32; 3]>, Vec<[u32; 3]>) = match normals {
-        Normals::Read => resolved.into_iter().unzip(),
-        Normals::Skip => (resolved.into_iter().map(|(t, _)| t).collect(), Vec::new()),
+    // Each chunk resolves its faces straight into its own stretch of the result, in
+    // parallel: no per-chunk vectors to join afterwards. The first error in file order wins.
+    let total: usize = done.iter().map(|(c, _)| c.faces.len()).sum();
+    let mut triangles = vec![[0u32; 3]; total];
+    let mut normal_ix = if normals == Normals::Read {
+        vec![[NO_NORMAL; 3]; total]
+    } else {
+        Vec::new()
     };
+    {
+        let mut tri_rest = &mut triangles[..];
+        let mut nrm_rest = &mut normal_ix[..];
+        let mut jobs = Vec::with_capacity(done.len());
+        for (c, off) in &done {
+            let (t, rest) = std::mem::take(&mut tri_rest).split_at_mut(c.faces.len());
+            tri_rest = rest;
+            let n = if normals == Normals::Read {
+                let (n, rest) = std::mem::take(&mut nrm_rest).split_at_mut(c.faces.len());
+                nrm_rest = rest;
+                n
+            } else {
+                &mut []
+            };
+            jobs.push((c, *off, t, n));
+        }
+        let errors: Vec<Option<String>> = jobs
+            .into_par_iter()
+            .map(|(c, off, t, n)| {
+                // Face by face, its positions before its normals, as errors are ordered.
+                for (k, f) in c.faces.iter().enumerate() {
+                    t[k] = resolve(f, off).map_err(Some)?;
+                    if let (Some(slot), Some(raw)) = (n.get_mut(k), c.face_normals.get(k)) {
+                        *slot = resolve_normals(raw, f.2, off).map_err(Some)?;
+                    }
+                }
+                Ok::<(), Option<String>>(())
+            })
+            .map(|r| r.err().flatten())
+            .collect();
+        if let Some(e) = errors.into_iter().flatten().next() {
+            return Err(e);
+        }
+    }
     let short_faces = done
         .iter()
         .flat_map(|(c, (l0, _, _))| c.short_faces.iter().map(move |l| (l0 + l) as usize))
@@ -255,13 +293,12 @@ fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chun
                 let n_before = c.normals.len() as u32;
                 let nix = |k: usize| face_n.get(k).copied().unwrap_or(0);
                 for k in 2..face.len() {
-                    c.faces.push((
-                        [face[0], face[k - 1], face[k]],
-                        before,
-                        c.lines,
-                        [nix(0), nix(k - 1), nix(k)],
-                        n_before,
-                    ));
+                    c.faces
+                        .push(([face[0], face[k - 1], face[k]], before, c.lines));
+                    if normals == Normals::Read {
+                        c.face_normals
+                            .push(([nix(0), nix(k - 1), nix(k)], n_before));
+                    }
                 }
             }
             "vn" | "vt" | "o" | "g" | "s" => {}
