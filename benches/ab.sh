@@ -13,6 +13,12 @@
 # render time for the CPU), so mesh loading and device start are not counted.
 # Output: a markdown table on stdout and in bench-out/ab/last.md. Exit status 3 when a row
 # is flagged. No other tool is needed than bash, git, cargo, awk and sort.
+#
+# WHOLE=1 times whole processes instead (start to PNG, and their peak memory, with GNU
+# time), in two rows a scene and tracer: "first", where B's cache folder is empty at every
+# run (a first render, its cache writes included), and "cached", where B's cache holds the
+# scene (primed once). A runs with the same folders; a build without the cache ignores them.
+# Output in bench-out/ab/whole.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 a_rev="${1:-HEAD~1}"
@@ -75,7 +81,53 @@ frame_ms() { # binary scene backend -> the frame time in ms, or "fail"
         echo fail
     fi
 }
+whole() { # binary scene backend cache-dir -> "wall_ms peak_MiB", or "fail"
+    GLINT_CACHE_DIR="$4" /usr/bin/time -o "$out/time.txt" -f '%e %M' \
+        "$1" render "$2" -o "$out/frame.png" --size 1024x768 --backend "$3" >/dev/null 2>&1 || {
+        echo fail
+        return
+    }
+    awk '{printf "%.0f %.0f", $1 * 1000, $2 / 1024}' "$out/time.txt"
+}
 median() { tr ' ' '\n' | grep -v '^$' | sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+
+if [ -n "${WHOLE:-}" ]; then
+    {
+        echo "A = $a_rev ($A), B = $b_rev ($B); whole processes, $rounds rounds, A B interleaved; $(nproc) cores; $(date -u +%FT%TZ)"
+        echo
+        echo "| scene | tracer | run | A median ms | B median ms | B / A | A peak MiB | B peak MiB |"
+        echo "|---|---|---|---|---|---|---|---|"
+    } | tee "$out/whole.md"
+    for s in "${scenes[@]}"; do
+        for backend in ${BACKENDS:-cpu gpu}; do
+            rm -rf "$out/cache-warm"
+            whole "$B" "$s" "$backend" "$out/cache-warm" >/dev/null
+            for run in first cached; do
+                ta="" tb="" ma="" mb=""
+                for _ in $(seq "$rounds"); do
+                    dir="$out/cache-warm"
+                    if [ "$run" = first ]; then
+                        dir="$out/cache-cold"
+                        rm -rf "$dir"
+                    fi
+                    read -r t m <<<"$(whole "$A" "$s" "$backend" "$dir")"
+                    ta+=" $t" ma+=" ${m:-}"
+                    [ "$run" = first ] && rm -rf "$dir"
+                    read -r t m <<<"$(whole "$B" "$s" "$backend" "$dir")"
+                    tb+=" $t" mb+=" ${m:-}"
+                done
+                if [[ "$ta$tb" == *fail* ]]; then
+                    echo "| $(basename "$s" .toml) | $backend | $run | – | – | – | – | failed |" | tee -a "$out/whole.md"
+                    continue
+                fi
+                a="$(median <<<"$ta")" b="$(median <<<"$tb")"
+                echo "| $(basename "$s" .toml) | $backend | $run | $a | $b | $(awk -v a="$a" -v b="$b" 'BEGIN {printf "%.3f", b / a}') | $(median <<<"$ma") | $(median <<<"$mb") |" | tee -a "$out/whole.md"
+            done
+        done
+    done
+    rm -rf "$out/cache-warm" "$out/cache-cold"
+    exit 0
+fi
 
 {
     echo "A = $a_rev ($A), B = $b_rev ($B); $rounds rounds, A B interleaved; $(nproc) cores;"

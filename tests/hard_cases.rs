@@ -221,7 +221,7 @@ fn far_sphere_silhouettes_agree_with_the_oracle() {
                     origin: r.origin.into(),
                     dir: r.dir.into(),
                 };
-                (glint::cpu::trace::hit_sphere_textbook::<f32>(rr, &s, 0.0, f32::MAX) < f32::MAX)
+                (glint::cpu::prims::hit_sphere_textbook::<f32>(rr, &s, 0.0, f32::MAX) < f32::MAX)
                     != **o
             })
             .count();

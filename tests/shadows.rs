@@ -7,6 +7,7 @@ gpu_sentinel!();
 
 use common::{buffers, check_agreement, render_gpu};
 use glint::buffers::PRIM_NONE;
+use glint::cpu::prims;
 use glint::cpu::real::V3;
 use glint::cpu::trace::{self, Camera, Globals, Ray};
 use glint::scene::{Scene, TriangleAlgorithm};
@@ -66,7 +67,7 @@ fn huge_floor_casts_no_shadow_on_itself() {
                 }
                 floor += 1;
                 let p = ray.origin + ray.dir * hit.t;
-                let mut n = trace::surface_normal(&g, &hit, p);
+                let mut n = prims::prim_normal(&g, &hit, p);
                 if n.dot(ray.dir) > 0.0 {
                     n = -n;
                 }

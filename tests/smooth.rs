@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use common::{check_agreement, render_gpu, seed_scene};
 use glint::buffers::{SceneBuffers, Specialisation};
 use glint::compare::diff;
+use glint::cpu::prims;
 use glint::cpu::trace::{self, Camera, Globals, Hit};
 use glint::scene::{Scene, TriangleAlgorithm};
 
@@ -263,7 +264,7 @@ fn interpolated_normals_at_the_vertices_are_the_vertex_normals() {
                 v,
             };
             let n = unit3([gn[0] * s, gn[1] * s, gn[2] * s]);
-            let sh = trace::shading_at(&g, &hit, p.into(), n.into());
+            let sh = prims::shading_at(&g, &hit, p.into(), n.into());
             let got: [f32; 3] = sh.n.into();
             let len = (got[0] * got[0] + got[1] * got[1] + got[2] * got[2]).sqrt();
             assert!((len - 1.0).abs() < 4e-7, "length {len}");
@@ -545,11 +546,11 @@ fn hanikas_point_removes_most_of_the_shadow_terminator() {
                     continue;
                 }
                 let p = ray.origin + ray.dir * hit.t;
-                let mut n = trace::surface_normal(&g, &hit, p);
+                let mut n = prims::prim_normal(&g, &hit, p);
                 if n.dot(ray.dir) > 0.0 {
                     n = -n;
                 }
-                let sh = trace::shading_at(&g, &hit, p, n);
+                let sh = prims::shading_at(&g, &hit, p, n);
                 if !(sh.n.dot((light - p).normalize()) > 0.0) {
                     continue;
                 }

@@ -1,7 +1,9 @@
 //! The CPU tracers: the f32 mirror of the shader and the f64 ground truth, both from the
 //! one generic `trace.rs`, rows in parallel with rayon.
 
+pub mod common;
 pub mod packet;
+pub mod prims;
 /// The numeric kernel ([`crate::kernel::real`]), where the mirror's arithmetic lives.
 pub use crate::kernel::real;
 pub mod trace;

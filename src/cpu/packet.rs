@@ -20,12 +20,10 @@
 // Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
 #![allow(clippy::needless_range_loop)]
 
+use super::common::{BVH_STACK, Globals, Hit, Ray, clamp01, in_interval, max0};
+use super::prims::{Shear, edge_function, hit_prim, hit_sphere, hit_triangle, shading_at};
 use super::real::V3;
-use super::trace::{
-    BVH_STACK, Globals, Hit, Ray, Shear, clamp01, edge_function, finite_bound, hit_prim,
-    hit_sphere, hit_triangle, in_interval, max0, nearer, phong_power, sample_offset, shading_at,
-    shadow_origin, tie_bound,
-};
+use super::trace::{finite_bound, nearer, phong_power, sample_offset, shadow_origin, tie_bound};
 use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE,
     TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle,
@@ -886,7 +884,7 @@ fn shade_lanes(
     };
     let mats: [&Material; LANES] = std::array::from_fn(|l| {
         let hit = &hits[src(l)];
-        // `hit_material`.
+        // `prim_material`.
         let material = if (hit.prim & TRIANGLE_BIT) != 0 {
             tri_of(src(l)).material
         } else {
@@ -906,7 +904,7 @@ fn shade_lanes(
         p[0][l] = o.x + ray.dir.x * hit.t;
         p[1][l] = o.y + ray.dir.y * hit.t;
         p[2][l] = o.z + ray.dir.z * hit.t;
-        // `surface_normal` before its normalize.
+        // `prim_normal` before its normalize.
         if (hit.prim & TRIANGLE_BIT) != 0 {
             let tri = tri_of(src(l));
             let e1 = [0, 1, 2].map(|k| tri.b[k] - tri.a[k]);
