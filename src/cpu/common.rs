@@ -13,7 +13,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::buffers::{SceneBuffers, Specialisation};
-use crate::cpu::real::{Real, V3};
+use crate::kernel::real::{Real, V3};
 
 /// WGSL `BVH_STACK`: the traversal stack, as deep as the builder lets a tree be.
 pub const BVH_STACK: usize = crate::bvh::MAX_DEPTH;

@@ -10,7 +10,7 @@ use crate::buffers::{
     FLAT, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE, TRIANGLE_WATERTIGHT,
     Triangle,
 };
-use crate::cpu::real::{Real, V3};
+use crate::kernel::real::{Real, V3};
 
 // ---- spheres -----------------------------------------------------------------------------
 
