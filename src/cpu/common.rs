@@ -93,16 +93,19 @@ pub struct Hit<R> {
 // ---- small helpers ---------------------------------------------------------------------
 
 /// WGSL `max0`: `x` when `x > 0`, else 0 (NaN gives 0).
+#[inline]
 pub fn max0<R: Real>(x: R) -> R {
     if x > R::ZERO { x } else { R::ZERO }
 }
 
 /// WGSL `max2`: the larger of `a` and `b` (`b` when either is NaN).
+#[inline]
 pub fn max2<R: Real>(a: R, b: R) -> R {
     if a > b { a } else { b }
 }
 
 /// WGSL `clamp01`: `x` clamped to [0, 1] (NaN gives 0).
+#[inline]
 pub fn clamp01<R: Real>(x: R) -> R {
     if !(x > R::ZERO) {
         R::ZERO
@@ -114,11 +117,13 @@ pub fn clamp01<R: Real>(x: R) -> R {
 }
 
 /// WGSL `in_interval`: whether t lies in (t_min, t_max); false for NaN.
+#[inline]
 pub fn in_interval<R: Real>(t: R, t_min: R, t_max: R) -> bool {
     t > t_min && t < t_max
 }
 
 /// WGSL `select(-1.0, 1.0, b >= 0.0)`.
+#[inline]
 pub fn sign_nonneg<R: Real>(b: R) -> R {
     if b >= R::ZERO { R::ONE } else { -R::ONE }
 }
