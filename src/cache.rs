@@ -5,7 +5,7 @@
 //! Off unless the program turns it on ([`enable`]; `glint render` does, `--no-cache` skips
 //! it), so the library never writes to a user's folders by itself. An entry's key is an
 //! XXH3-128 hash of everything its value is made from: the input bytes and settings, and
-//! the source of the code that makes the value ([`CODE`]), so a new glint never reads an
+//! the source of the code that makes the value (`CODE`), so a new glint never reads an
 //! old glint's entry. An entry carries an XXH3-64 checksum of its payload; an entry that
 //! fails it, or is cut short, or names another key, is deleted and rebuilt, with one
 //! warning. Entries are written to a temporary name and renamed into place, so a reader
@@ -41,7 +41,7 @@ static DIR: Mutex<Option<PathBuf>> = Mutex::new(None);
 /// What the cache did during this process, for `glint render -v` and the tests.
 static EVENTS: Mutex<Vec<String>> = Mutex::new(Vec::new());
 
-/// The key of an entry: a hash of its inputs and of [`CODE`].
+/// The key of an entry: a hash of its inputs and of `CODE` (the source of the code that makes entries).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Key(u128);
 
