@@ -1,4 +1,4 @@
-//! The CPU's packet tracer (`src/cpu/packet.rs`, what `render_f32` runs)
+//! The CPU's packet tracer (`src/cpu/packet/`, what `render_f32` runs)
 //! against the mirror it must equal: every f32 bit of every pixel the same as
 //! `render_f32_mirror` (one `trace_pixel` per pixel), on the seed scenes and random scenes
 //! both through the BVH and testing every primitive, on real meshes with each triangle

@@ -135,7 +135,7 @@ pub fn render_f64_rows(
 }
 
 /// Renders in f32 as the shader does, specialised as the GPU would be, in packets of eight
-/// camera rays (`packet.rs`). The image is [`render_f32_mirror`]'s, bit for bit
+/// camera rays (`packet/`). The image is [`render_f32_mirror`]'s, bit for bit
 /// (`tests/packets.rs`).
 pub fn render_f32(buf: &SceneBuffers, spec: Specialisation) -> Image {
     render_f32_progress(buf, spec, &|_, _| {})

@@ -1,106 +1,32 @@
-//! The CPU's fast path for camera rays: eight rays (a 4×2 block of pixels) are traced
-//! together. Through the BVH each node is fetched once for the eight and its two child
-//! boxes are tested against all eight at once; without it (small scenes) each primitive
-//! is tested against the eight at once. The lane loops below are written for LLVM to
-//! vectorise, and `trace_packet` is compiled a second time for AVX2.
-//!
-//! This is not a mirror of a WGSL function: it is the mirror's faster twin, and it gives
-//! the same image bit for bit. Lane by lane it does the mirror's operations in the
-//! mirror's order: `camera_ray`, `make_shear`, `box_interval`, the watertight test and
-//! `shade` are written again as lane loops, op for op; everything else (the other
-//! triangle tests, spheres, `pow`) calls the mirror's own functions one lane at a time.
-//! Shadow rays go eight at a time as well, each lane from its own origin. Only the order
-//! in which BVH leaves are reached differs, and `closest_hit_bvh`'s result does not
-//! depend on that order: it is the hit with the smallest t and, of equal t, the lowest
-//! primitive id (what `closest_hit_all` keeps), because every box test is conservative
-//! for any bound past the nearest hit. `occluded_bvh`'s answer does not depend on it
-//! either: each lane reaches exactly the leaves its own traversal would.
-//! `tests/packets.rs` checks the two images against each other, bit for bit.
+//! The packet twins of `trace.rs`: camera rays, the box test, the nearest-hit and shadow
+//! searches over every primitive or through the BVH, and shading, as lane loops.
 
 // Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
 #![allow(clippy::needless_range_loop)]
 
-use super::common::{BVH_STACK, Globals, Hit, Ray, clamp01, in_interval, max0};
-use super::prims::{Shear, edge_function, hit_prim, hit_sphere, hit_triangle, shading_at};
-use super::real::V3;
-use super::trace::{finite_bound, nearer, phong_power, sample_offset, shadow_origin, tie_bound};
-use crate::buffers::{
-    BOX_SLACK, BvhNode, INFINITY, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE,
-    TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle,
+use super::common::{
+    LANES, Lanes, Mask, Origins, PACKET_W, PerLane, Shared, dot_lane, mask_of, normalize_lanes,
 };
-
-/// Rays per packet.
-pub const LANES: usize = 8;
-const _: () = assert!(LANES == 8, "mask_of gathers exactly eight flags");
-/// Packet width in pixels (the packet is `PACKET_W` × `PACKET_H`).
-pub const PACKET_W: u32 = 4;
-/// Packet height in pixels.
-pub const PACKET_H: u32 = 2;
-
-/// A bit per lane.
-pub type Mask = u8;
-
-/// Where the lanes' rays start: `rel(p, l)` is `p - origin` of lane l, per component.
-trait Origins {
-    fn rel(&self, p: &[f32; 3], l: usize) -> [f32; 3];
-}
-
-/// One origin for every lane (camera rays): LLVM hoists `rel` out of the lane loops.
-struct Shared(V3<f32>);
-
-impl Origins for Shared {
-    #[inline(always)]
-    fn rel(&self, p: &[f32; 3], _l: usize) -> [f32; 3] {
-        [p[0] - self.0.x, p[1] - self.0.y, p[2] - self.0.z]
-    }
-}
-
-/// An origin per lane (shadow rays), as structure of arrays.
-struct PerLane([[f32; LANES]; 3]);
-
-impl Origins for PerLane {
-    #[inline(always)]
-    fn rel(&self, p: &[f32; 3], l: usize) -> [f32; 3] {
-        [
-            p[0] - self.0[0][l],
-            p[1] - self.0[1][l],
-            p[2] - self.0[2][l],
-        ]
-    }
-}
-
-/// Rays with their reciprocal directions as structure of arrays.
-struct Lanes<O> {
-    origin: O,
-    ix: [f32; LANES],
-    iy: [f32; LANES],
-    iz: [f32; LANES],
-}
-
-impl<O> Lanes<O> {
-    /// The rays from `origin` with directions `dir` (structure of arrays).
-    #[inline(always)]
-    fn new(origin: O, dir: &[[f32; LANES]; 3]) -> Self {
-        let mut r = Lanes {
-            origin,
-            ix: [0.0; LANES],
-            iy: [0.0; LANES],
-            iz: [0.0; LANES],
-        };
-        for l in 0..LANES {
-            r.ix[l] = 1.0 / dir[0][l];
-            r.iy[l] = 1.0 / dir[1][l];
-            r.iz[l] = 1.0 / dir[2][l];
-        }
-        r
-    }
-}
+use super::prims::{
+    ShearLanes, leaf_triangle, prim_lanes, prim_material, prim_normal, shear_lanes,
+    watertight_lanes,
+};
+use crate::buffers::{
+    BOX_SLACK, BvhNode, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, TRIANGLE_BIT,
+    TRIANGLE_WATERTIGHT, Triangle,
+};
+use crate::cpu::common::{BVH_STACK, Globals, Hit, Ray, clamp01, max0};
+use crate::cpu::prims::{hit_prim, hit_sphere, shading_at};
+use crate::cpu::trace::{
+    finite_bound, nearer, phong_power, sample_offset, shadow_origin, tie_bound,
+};
+use crate::kernel::real::V3;
 
 /// `box_interval` for every lane at once: the lanes whose ray meets `node`'s box in
 /// (t_min, bound), and each lane's entry distance. The same operations as
 /// `box_interval`, lane by lane.
 #[inline(always)]
-fn box_lanes<O: Origins>(
+pub(super) fn box_lanes<O: Origins>(
     node: &BvhNode,
     r: &Lanes<O>,
     t_min: f32,
@@ -141,185 +67,11 @@ fn box_lanes<O: Origins>(
     mask_of(&hit)
 }
 
-/// The bits of eight flags, lane l in bit l. Branch-free: the flags as bytes (0 or 1)
-/// times 0x0102040810204080 puts byte l's bit in bit 56 + l, and no two partial products
-/// share a bit, so nothing carries.
-#[inline(always)]
-fn mask_of(flags: &[bool; LANES]) -> Mask {
-    let bytes: [u8; LANES] = flags.map(|f| f as u8);
-    (u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56) as Mask
-}
-
-/// The lanes' `Shear`s as structure of arrays.
-struct ShearLanes {
-    kx: [u32; LANES],
-    ky: [u32; LANES],
-    kz: [u32; LANES],
-    sx: [f32; LANES],
-    sy: [f32; LANES],
-    sz: [f32; LANES],
-}
-
-/// `ray_shear` of every lane: `make_shear` lane by lane when `watertight` (the same
-/// comparisons, the same one division), else the identity `ray_shear` gives.
-#[inline(always)]
-fn shear_lanes(dir: &[[f32; LANES]; 3], watertight: bool) -> ShearLanes {
-    let mut sh = ShearLanes {
-        kx: [0; LANES],
-        ky: [1; LANES],
-        kz: [2; LANES],
-        sx: [0.0; LANES],
-        sy: [0.0; LANES],
-        sz: [1.0; LANES],
-    };
-    if !watertight {
-        return sh;
-    }
-    for l in 0..LANES {
-        let d = [dir[0][l], dir[1][l], dir[2][l]];
-        let ad = [d[0].abs(), d[1].abs(), d[2].abs()];
-        let mut kz = if ad[1] > ad[0] { 1 } else { 0 };
-        if ad[2] > pick(&ad, kz) {
-            kz = 2;
-        }
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if pick(&d, kz) < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let sz = 1.0 / pick(&d, kz);
-        sh.kx[l] = kx;
-        sh.ky[l] = ky;
-        sh.kz[l] = kz;
-        sh.sx[l] = pick(&d, kx) * sz;
-        sh.sy[l] = pick(&d, ky) * sz;
-        sh.sz[l] = sz;
-    }
-    sh
-}
-
-impl ShearLanes {
-    /// Lane l's `Shear`.
-    #[inline(always)]
-    fn lane(&self, l: usize) -> Shear<f32> {
-        Shear {
-            kx: self.kx[l],
-            ky: self.ky[l],
-            kz: self.kz[l],
-            sx: self.sx[l],
-            sy: self.sy[l],
-            sz: self.sz[l],
-        }
-    }
-}
-
-/// Each lane's (t, u, v), t = INFINITY on a miss.
-struct TriLanes {
-    t: [f32; LANES],
-    u: [f32; LANES],
-    v: [f32; LANES],
-}
-
-/// `V3::get`: component k of (x, y, z), as selects so that a lane loop vectorises.
-#[inline(always)]
-fn pick(v: &[f32; 3], k: u32) -> f32 {
-    if k == 0 {
-        v[0]
-    } else if k == 1 {
-        v[1]
-    } else {
-        v[2]
-    }
-}
-
-/// The sheared vertices (ax, ay, bx, by, cx, cy) of `hit_triangle_watertight` for lane l,
-/// from the vertices relative to the origin.
-#[inline(always)]
-fn sheared(a: &[f32; 3], b: &[f32; 3], c: &[f32; 3], sh: &ShearLanes, l: usize) -> [f32; 6] {
-    let (kx, ky, kz) = (sh.kx[l], sh.ky[l], sh.kz[l]);
-    [
-        pick(a, kx) - sh.sx[l] * pick(a, kz),
-        pick(a, ky) - sh.sy[l] * pick(a, kz),
-        pick(b, kx) - sh.sx[l] * pick(b, kz),
-        pick(b, ky) - sh.sy[l] * pick(b, kz),
-        pick(c, kx) - sh.sx[l] * pick(c, kz),
-        pick(c, ky) - sh.sy[l] * pick(c, kz),
-    ]
-}
-
-/// `hit_triangle_watertight` of one triangle for every lane, with lane l's `t_max` =
-/// `t_max[l]`: the same operations in the same order, lane by lane. An edge function
-/// that comes out exactly 0 is recomputed by `edge_function` itself (its exact
-/// fallback), so that every lane's (t, u, v) is the scalar test's, bit for bit.
-#[inline(always)]
-fn watertight_lanes<O: Origins>(
-    tri: &Triangle,
-    r: &Lanes<O>,
-    sh: &ShearLanes,
-    mask: Mask,
-    t_min: f32,
-    t_max: &[f32; LANES],
-) -> TriLanes {
-    let rel = |l: usize| {
-        (
-            r.origin.rel(&tri.a, l),
-            r.origin.rel(&tri.b, l),
-            r.origin.rel(&tri.c, l),
-        )
-    };
-    let mut e = [[0.0f32; LANES]; 3];
-    let mut zero_flags = [false; LANES];
-    for l in 0..LANES {
-        let (a, b, c) = rel(l);
-        let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
-        e[0][l] = cx * by - cy * bx;
-        e[1][l] = ax * cy - ay * cx;
-        e[2][l] = bx * ay - by * ax;
-        zero_flags[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
-    }
-    let zero = mask_of(&zero_flags);
-    let mut fix = zero & mask;
-    while fix != 0 {
-        let l = fix.trailing_zeros() as usize;
-        fix &= fix - 1;
-        let (a, b, c) = rel(l);
-        let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
-        e[0][l] = edge_function(cx, by, cy, bx);
-        e[1][l] = edge_function(ax, cy, ay, cx);
-        e[2][l] = edge_function(bx, ay, by, ax);
-    }
-    let mut out = TriLanes {
-        t: [INFINITY; LANES],
-        u: [0.0; LANES],
-        v: [0.0; LANES],
-    };
-    for l in 0..LANES {
-        let (u, v, w) = (e[0][l], e[1][l], e[2][l]);
-        let outside = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
-        let det = u + v + w;
-        #[allow(clippy::eq_op)]
-        let degenerate = det == 0.0 || det != det;
-        let kz = sh.kz[l];
-        let (a, b, c) = rel(l);
-        let az = sh.sz[l] * pick(&a, kz);
-        let bz = sh.sz[l] * pick(&b, kz);
-        let cz = sh.sz[l] * pick(&c, kz);
-        let t_scaled = u * az + v * bz + w * cz;
-        let inv_det = 1.0 / det;
-        let t = t_scaled * inv_det;
-        let hit = !outside && !degenerate && in_interval(t, t_min, t_max[l]);
-        out.t[l] = if hit { t } else { INFINITY };
-        out.u[l] = if hit { v * inv_det } else { 0.0 };
-        out.v[l] = if hit { w * inv_det } else { 0.0 };
-    }
-    out
-}
-
 /// Asks the cache for what a step at `node` will read next: its far child's box (the
 /// near one sits right after it), or its first primitive's triangle. Only a hint: no
 /// value depends on it.
 #[inline(always)]
-fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
+pub(super) fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (g, node);
     #[cfg(target_arch = "x86_64")]
@@ -345,52 +97,10 @@ fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
     }
 }
 
-/// `hit_prim` of primitive `id` for the lanes in `mask`, lane l against `t_max[l]`; `tri`
-/// is its triangle when it is one (`triangles[id]` or its copy in `leaf_triangles`). A
-/// triangle goes through `watertight_lanes` under the watertight algorithm, else through
-/// the mirror's `hit_triangle` lane by lane; a sphere through the mirror's `hit_prim`.
-/// Only the lanes in `mask` are meaningful.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn prim_lanes<O: Origins>(
-    g: &Globals<f32>,
-    ray: impl Fn(usize) -> Ray<f32>,
-    r: &Lanes<O>,
-    sh: &ShearLanes,
-    id: u32,
-    tri: Option<&Triangle>,
-    mask: Mask,
-    t_min: f32,
-    t_max: &[f32; LANES],
-) -> TriLanes {
-    let tri = tri.filter(|_| g.spec.has_triangles);
-    if let Some(tri) = tri
-        && g.spec.triangle_algo == TRIANGLE_WATERTIGHT
-    {
-        return watertight_lanes(tri, r, sh, mask, t_min, t_max);
-    }
-    let mut h = TriLanes {
-        t: [INFINITY; LANES],
-        u: [0.0; LANES],
-        v: [0.0; LANES],
-    };
-    let mut m = mask;
-    while m != 0 {
-        let l = m.trailing_zeros() as usize;
-        m &= m - 1;
-        (h.t[l], h.u[l], h.v[l]) = match tri {
-            // `hit_prim` of a triangle, with the triangle already in hand.
-            Some(tri) => hit_triangle(g, ray(l), sh.lane(l), tri, t_min, t_max[l]),
-            None => hit_prim(g, ray(l), sh.lane(l), id, t_min, t_max[l]),
-        };
-    }
-    h
-}
-
 /// `closest_hit_all` for every lane in `mask`, into `best` (misses at t_max): spheres
 /// then triangles in index order, each lane's t_max its own nearest t so far.
 #[inline(always)]
-fn closest_hit_all_lanes(
+pub(super) fn closest_hit_all_lanes(
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
     r: &Lanes<Shared>,
@@ -460,7 +170,7 @@ pub struct PacketHits {
 /// Returns the child to visit next with its lanes, or `None` when no lane enters either.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn descend<O: Origins>(
+pub(super) fn descend<O: Origins>(
     g: &Globals<f32>,
     at: u32,
     node: &BvhNode,
@@ -512,7 +222,7 @@ fn descend<O: Origins>(
 /// tests are `box_interval`'s operations, against a t_max that never shrinks), so the
 /// answer is the same, whatever order the packet takes.
 #[inline(always)]
-fn occluded_lanes(
+pub(super) fn occluded_lanes(
     g: &Globals<f32>,
     o: [[f32; LANES]; 3],
     d: &[[f32; LANES]; 3],
@@ -598,7 +308,7 @@ fn occluded_lanes(
             } else {
                 for k in node.first..node.first + count {
                     let id = g.buf.prim_ids[k as usize];
-                    let tri = ((id & TRIANGLE_BIT) != 0).then(|| &g.buf.leaf_triangles[k as usize]);
+                    let tri = leaf_triangle(g, id, k);
                     blocked |= test(id, tri, lanes & !blocked);
                     if lanes & !blocked == 0 {
                         break;
@@ -681,7 +391,7 @@ pub fn closest_hit_packet(
         } else {
             for k in node.first..node.first + count {
                 let id = g.buf.prim_ids[k as usize];
-                let tri = ((id & TRIANGLE_BIT) != 0).then(|| &g.buf.leaf_triangles[k as usize]);
+                let tri = leaf_triangle(g, id, k);
                 let h = prim_lanes(g, |l| rays[l], &r, &sh, id, tri, mask, t_min, &bound);
                 let mut m = mask;
                 while m != 0 {
@@ -707,39 +417,6 @@ pub fn closest_hit_packet(
         (at, mask) = stack[sp];
     }
     out
-}
-
-/// Which build of the packet tracer runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Simd {
-    /// The widest the CPU has (AVX2 on x86-64 when present).
-    Best,
-    /// The build for the target's baseline instruction set (SSE2 on x86-64), which a CPU
-    /// without AVX2 runs: tests check it too.
-    Baseline,
-}
-
-/// `trace_pixel` for the `PACKET_W` × `PACKET_H` block whose top-left pixel is (i, j),
-/// lane `dy * PACKET_W + dx` for pixel (i + dx, j + dy); pixels outside the image are
-/// left out.
-/// `simd` picks the build: [`Simd::Best`] is AVX2 where the CPU has it.
-pub fn trace_packet(g: &Globals<f32>, i: u32, j: u32, simd: Simd) -> [[f32; 4]; LANES] {
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = simd;
-    #[cfg(target_arch = "x86_64")]
-    if simd == Simd::Best && std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2, checked just above.
-        return unsafe { trace_packet_avx2(g, i, j) };
-    }
-    trace_packet_body(g, i, j)
-}
-
-/// `trace_packet` compiled for AVX2: the lane loops become eight-wide. Floating-point
-/// results do not change with the instruction set (Rust never contracts `a * b + c`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn trace_packet_avx2(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
-    trace_packet_body(g, i, j)
 }
 
 /// `camera_ray` through the point (dx, dy) of each pixel of the block at (i, j), lane by
@@ -788,7 +465,7 @@ pub fn camera_rays(
 /// pixels at the same point of their pixel (as coherent as the block itself), the lanes
 /// summing their samples in `trace_pixel`'s order.
 #[inline(always)]
-fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
+pub(super) fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
     let half = 1.0f32 / (1.0 + 1.0);
     if !g.spec.antialias {
         return sample_packet(g, i, j, half, half);
@@ -817,7 +494,13 @@ fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
 
 /// `trace_sample` at the point (dx, dy) of each pixel of the block.
 #[inline(always)]
-fn sample_packet(g: &Globals<f32>, i: u32, j: u32, dx: f32, dy: f32) -> [[f32; 4]; LANES] {
+pub(super) fn sample_packet(
+    g: &Globals<f32>,
+    i: u32,
+    j: u32,
+    dx: f32,
+    dy: f32,
+) -> [[f32; 4]; LANES] {
     let (rays, active) = camera_rays(g, i, j, dx, dy);
     let found = closest_hit_packet(g, &rays, active, 0.0, f32::MAX);
     let hits = &found.hits;
@@ -836,32 +519,13 @@ fn sample_packet(g: &Globals<f32>, i: u32, j: u32, dx: f32, dy: f32) -> [[f32; 4
     })
 }
 
-/// `a · b` of lane l, left to right as `V3::dot`.
-#[inline(always)]
-fn dot_lane(a: &[[f32; LANES]; 3], b: &[[f32; LANES]; 3], l: usize) -> f32 {
-    a[0][l] * b[0][l] + a[1][l] * b[1][l] + a[2][l] * b[2][l]
-}
-
-/// `V3::normalize` of every lane.
-#[inline(always)]
-fn normalize_lanes(v: &[[f32; LANES]; 3]) -> [[f32; LANES]; 3] {
-    let mut out = [[0.0f32; LANES]; 3];
-    for l in 0..LANES {
-        let len = dot_lane(v, v, l).sqrt();
-        out[0][l] = v[0][l] / len;
-        out[1][l] = v[1][l] / len;
-        out[2][l] = v[2][l] / len;
-    }
-    out
-}
-
 /// `shade` for the lanes in `mask`, which must all hit something: the same operations in
 /// the same order, lane by lane, with the square roots, divisions and the exponent's
 /// squarings as lane loops. Shadow rays and non-integer exponents go lane by lane
 /// through the mirror's own `occluded` and `phong_power`. Lanes outside `mask` compute
 /// lane `mask`'s first lane's values, which are not used.
 #[inline(always)]
-fn shade_lanes(
+pub(super) fn shade_lanes(
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
     found: &PacketHits,
@@ -883,13 +547,7 @@ fn shade_lanes(
         &g.buf.triangles[(hits[l].prim & !TRIANGLE_BIT) as usize]
     };
     let mats: [&Material; LANES] = std::array::from_fn(|l| {
-        let hit = &hits[src(l)];
-        // `prim_material`.
-        let material = if (hit.prim & TRIANGLE_BIT) != 0 {
-            tri_of(src(l)).material
-        } else {
-            g.buf.spheres[hit.prim as usize].material
-        };
+        let material = prim_material(g, &hits[src(l)], || tri_of(src(l)));
         &g.buf.materials[material as usize]
     });
     let o = g.cam.eye;
@@ -904,20 +562,10 @@ fn shade_lanes(
         p[0][l] = o.x + ray.dir.x * hit.t;
         p[1][l] = o.y + ray.dir.y * hit.t;
         p[2][l] = o.z + ray.dir.z * hit.t;
-        // `prim_normal` before its normalize.
-        if (hit.prim & TRIANGLE_BIT) != 0 {
-            let tri = tri_of(src(l));
-            let e1 = [0, 1, 2].map(|k| tri.b[k] - tri.a[k]);
-            let e2 = [0, 1, 2].map(|k| tri.c[k] - tri.a[k]);
-            nv[0][l] = e1[1] * e2[2] - e1[2] * e2[1];
-            nv[1][l] = e1[2] * e2[0] - e1[0] * e2[2];
-            nv[2][l] = e1[0] * e2[1] - e1[1] * e2[0];
-        } else {
-            let c = g.buf.spheres[hit.prim as usize].center;
-            nv[0][l] = p[0][l] - c[0];
-            nv[1][l] = p[1][l] - c[1];
-            nv[2][l] = p[2][l] - c[2];
-        }
+        let v = prim_normal(g, hit, [p[0][l], p[1][l], p[2][l]], || tri_of(src(l)));
+        nv[0][l] = v[0];
+        nv[1][l] = v[1];
+        nv[2][l] = v[2];
     }
     let mut n = normalize_lanes(&nv);
     let ambient = g.buf.params.ambient;
@@ -1032,7 +680,11 @@ fn shade_lanes(
 /// lane whose exponent is spent multiplies no further, as the scalar loop stops), other
 /// exponents through `phong_power` itself.
 #[inline(always)]
-fn phong_power_lanes(base: &[f32; LANES], mats: &[&Material; LANES], mask: Mask) -> [f32; LANES] {
+pub(super) fn phong_power_lanes(
+    base: &[f32; LANES],
+    mats: &[&Material; LANES],
+    mask: Mask,
+) -> [f32; LANES] {
     let mut result = [1.0f32; LANES];
     let mut b = *base;
     let mut e = [0u32; LANES];

@@ -1,0 +1,105 @@
+//! The packet twins of `common.rs`: the packet's size, its rays as structure of arrays
+//! (with one origin or one per lane), lane masks and lane-wise vector helpers.
+
+// Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
+#![allow(clippy::needless_range_loop)]
+
+use crate::kernel::real::V3;
+
+/// Rays per packet.
+pub const LANES: usize = 8;
+
+const _: () = assert!(LANES == 8, "mask_of gathers exactly eight flags");
+
+/// Packet width in pixels (the packet is `PACKET_W` × `PACKET_H`).
+pub const PACKET_W: u32 = 4;
+
+/// Packet height in pixels.
+pub const PACKET_H: u32 = 2;
+
+/// A bit per lane.
+pub type Mask = u8;
+
+/// Where the lanes' rays start: `rel(p, l)` is `p - origin` of lane l, per component.
+pub(super) trait Origins {
+    fn rel(&self, p: &[f32; 3], l: usize) -> [f32; 3];
+}
+
+/// One origin for every lane (camera rays): LLVM hoists `rel` out of the lane loops.
+pub(super) struct Shared(pub(super) V3<f32>);
+
+impl Origins for Shared {
+    #[inline(always)]
+    fn rel(&self, p: &[f32; 3], _l: usize) -> [f32; 3] {
+        [p[0] - self.0.x, p[1] - self.0.y, p[2] - self.0.z]
+    }
+}
+
+/// An origin per lane (shadow rays), as structure of arrays.
+pub(super) struct PerLane(pub(super) [[f32; LANES]; 3]);
+
+impl Origins for PerLane {
+    #[inline(always)]
+    fn rel(&self, p: &[f32; 3], l: usize) -> [f32; 3] {
+        [
+            p[0] - self.0[0][l],
+            p[1] - self.0[1][l],
+            p[2] - self.0[2][l],
+        ]
+    }
+}
+
+/// Rays with their reciprocal directions as structure of arrays.
+pub(super) struct Lanes<O> {
+    pub(super) origin: O,
+    pub(super) ix: [f32; LANES],
+    pub(super) iy: [f32; LANES],
+    pub(super) iz: [f32; LANES],
+}
+
+impl<O> Lanes<O> {
+    /// The rays from `origin` with directions `dir` (structure of arrays).
+    #[inline(always)]
+    pub(super) fn new(origin: O, dir: &[[f32; LANES]; 3]) -> Self {
+        let mut r = Lanes {
+            origin,
+            ix: [0.0; LANES],
+            iy: [0.0; LANES],
+            iz: [0.0; LANES],
+        };
+        for l in 0..LANES {
+            r.ix[l] = 1.0 / dir[0][l];
+            r.iy[l] = 1.0 / dir[1][l];
+            r.iz[l] = 1.0 / dir[2][l];
+        }
+        r
+    }
+}
+
+/// The bits of eight flags, lane l in bit l. Branch-free: the flags as bytes (0 or 1)
+/// times 0x0102040810204080 puts byte l's bit in bit 56 + l, and no two partial products
+/// share a bit, so nothing carries.
+#[inline(always)]
+pub(super) fn mask_of(flags: &[bool; LANES]) -> Mask {
+    let bytes: [u8; LANES] = flags.map(|f| f as u8);
+    (u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56) as Mask
+}
+
+/// `a · b` of lane l, left to right as `V3::dot`.
+#[inline(always)]
+pub(super) fn dot_lane(a: &[[f32; LANES]; 3], b: &[[f32; LANES]; 3], l: usize) -> f32 {
+    a[0][l] * b[0][l] + a[1][l] * b[1][l] + a[2][l] * b[2][l]
+}
+
+/// `V3::normalize` of every lane.
+#[inline(always)]
+pub(super) fn normalize_lanes(v: &[[f32; LANES]; 3]) -> [[f32; LANES]; 3] {
+    let mut out = [[0.0f32; LANES]; 3];
+    for l in 0..LANES {
+        let len = dot_lane(v, v, l).sqrt();
+        out[0][l] = v[0][l] / len;
+        out[1][l] = v[1][l] / len;
+        out[2][l] = v[2][l] / len;
+    }
+    out
+}

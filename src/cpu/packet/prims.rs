@@ -1,0 +1,269 @@
+//! The packet twins of `prims.rs`: the watertight triangle test as lane loops (op for op
+//! the mirror's), and one primitive against the packet (`prim_lanes`: the other tests
+//! through the mirror's own functions, a lane at a time).
+
+// Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
+#![allow(clippy::needless_range_loop)]
+
+use super::common::{LANES, Lanes, Mask, Origins, mask_of};
+use crate::buffers::{INFINITY, TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle};
+use crate::cpu::common::{Globals, Hit, Ray, in_interval};
+use crate::cpu::prims::{Shear, edge_function, hit_prim, hit_triangle};
+
+/// The lanes' `Shear`s as structure of arrays.
+pub(super) struct ShearLanes {
+    pub(super) kx: [u32; LANES],
+    pub(super) ky: [u32; LANES],
+    pub(super) kz: [u32; LANES],
+    pub(super) sx: [f32; LANES],
+    pub(super) sy: [f32; LANES],
+    pub(super) sz: [f32; LANES],
+}
+
+/// `ray_shear` of every lane: `make_shear` lane by lane when `watertight` (the same
+/// comparisons, the same one division), else the identity `ray_shear` gives.
+#[inline(always)]
+pub(super) fn shear_lanes(dir: &[[f32; LANES]; 3], watertight: bool) -> ShearLanes {
+    let mut sh = ShearLanes {
+        kx: [0; LANES],
+        ky: [1; LANES],
+        kz: [2; LANES],
+        sx: [0.0; LANES],
+        sy: [0.0; LANES],
+        sz: [1.0; LANES],
+    };
+    if !watertight {
+        return sh;
+    }
+    for l in 0..LANES {
+        let d = [dir[0][l], dir[1][l], dir[2][l]];
+        let ad = [d[0].abs(), d[1].abs(), d[2].abs()];
+        let mut kz = if ad[1] > ad[0] { 1 } else { 0 };
+        if ad[2] > pick(&ad, kz) {
+            kz = 2;
+        }
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if pick(&d, kz) < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let sz = 1.0 / pick(&d, kz);
+        sh.kx[l] = kx;
+        sh.ky[l] = ky;
+        sh.kz[l] = kz;
+        sh.sx[l] = pick(&d, kx) * sz;
+        sh.sy[l] = pick(&d, ky) * sz;
+        sh.sz[l] = sz;
+    }
+    sh
+}
+
+impl ShearLanes {
+    /// Lane l's `Shear`.
+    #[inline(always)]
+    pub(super) fn lane(&self, l: usize) -> Shear<f32> {
+        Shear {
+            kx: self.kx[l],
+            ky: self.ky[l],
+            kz: self.kz[l],
+            sx: self.sx[l],
+            sy: self.sy[l],
+            sz: self.sz[l],
+        }
+    }
+}
+
+/// Each lane's (t, u, v), t = INFINITY on a miss.
+pub(super) struct TriLanes {
+    pub(super) t: [f32; LANES],
+    pub(super) u: [f32; LANES],
+    pub(super) v: [f32; LANES],
+}
+
+/// `V3::get`: component k of (x, y, z), as selects so that a lane loop vectorises.
+#[inline(always)]
+pub(super) fn pick(v: &[f32; 3], k: u32) -> f32 {
+    if k == 0 {
+        v[0]
+    } else if k == 1 {
+        v[1]
+    } else {
+        v[2]
+    }
+}
+
+/// The sheared vertices (ax, ay, bx, by, cx, cy) of `hit_triangle_watertight` for lane l,
+/// from the vertices relative to the origin.
+#[inline(always)]
+pub(super) fn sheared(
+    a: &[f32; 3],
+    b: &[f32; 3],
+    c: &[f32; 3],
+    sh: &ShearLanes,
+    l: usize,
+) -> [f32; 6] {
+    let (kx, ky, kz) = (sh.kx[l], sh.ky[l], sh.kz[l]);
+    [
+        pick(a, kx) - sh.sx[l] * pick(a, kz),
+        pick(a, ky) - sh.sy[l] * pick(a, kz),
+        pick(b, kx) - sh.sx[l] * pick(b, kz),
+        pick(b, ky) - sh.sy[l] * pick(b, kz),
+        pick(c, kx) - sh.sx[l] * pick(c, kz),
+        pick(c, ky) - sh.sy[l] * pick(c, kz),
+    ]
+}
+
+/// `hit_triangle_watertight` of one triangle for every lane, with lane l's `t_max` =
+/// `t_max[l]`: the same operations in the same order, lane by lane. An edge function
+/// that comes out exactly 0 is recomputed by `edge_function` itself (its exact
+/// fallback), so that every lane's (t, u, v) is the scalar test's, bit for bit.
+#[inline(always)]
+pub(super) fn watertight_lanes<O: Origins>(
+    tri: &Triangle,
+    r: &Lanes<O>,
+    sh: &ShearLanes,
+    mask: Mask,
+    t_min: f32,
+    t_max: &[f32; LANES],
+) -> TriLanes {
+    let rel = |l: usize| {
+        (
+            r.origin.rel(&tri.a, l),
+            r.origin.rel(&tri.b, l),
+            r.origin.rel(&tri.c, l),
+        )
+    };
+    let mut e = [[0.0f32; LANES]; 3];
+    let mut zero_flags = [false; LANES];
+    for l in 0..LANES {
+        let (a, b, c) = rel(l);
+        let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
+        e[0][l] = cx * by - cy * bx;
+        e[1][l] = ax * cy - ay * cx;
+        e[2][l] = bx * ay - by * ax;
+        zero_flags[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
+    }
+    let zero = mask_of(&zero_flags);
+    let mut fix = zero & mask;
+    while fix != 0 {
+        let l = fix.trailing_zeros() as usize;
+        fix &= fix - 1;
+        let (a, b, c) = rel(l);
+        let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
+        e[0][l] = edge_function(cx, by, cy, bx);
+        e[1][l] = edge_function(ax, cy, ay, cx);
+        e[2][l] = edge_function(bx, ay, by, ax);
+    }
+    let mut out = TriLanes {
+        t: [INFINITY; LANES],
+        u: [0.0; LANES],
+        v: [0.0; LANES],
+    };
+    for l in 0..LANES {
+        let (u, v, w) = (e[0][l], e[1][l], e[2][l]);
+        let outside = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
+        let det = u + v + w;
+        #[allow(clippy::eq_op)]
+        let degenerate = det == 0.0 || det != det;
+        let kz = sh.kz[l];
+        let (a, b, c) = rel(l);
+        let az = sh.sz[l] * pick(&a, kz);
+        let bz = sh.sz[l] * pick(&b, kz);
+        let cz = sh.sz[l] * pick(&c, kz);
+        let t_scaled = u * az + v * bz + w * cz;
+        let inv_det = 1.0 / det;
+        let t = t_scaled * inv_det;
+        let hit = !outside && !degenerate && in_interval(t, t_min, t_max[l]);
+        out.t[l] = if hit { t } else { INFINITY };
+        out.u[l] = if hit { v * inv_det } else { 0.0 };
+        out.v[l] = if hit { w * inv_det } else { 0.0 };
+    }
+    out
+}
+
+/// `hit_prim` of primitive `id` for the lanes in `mask`, lane l against `t_max[l]`; `tri`
+/// is its triangle when it is one (`triangles[id]` or its copy in `leaf_triangles`). A
+/// triangle goes through `watertight_lanes` under the watertight algorithm, else through
+/// the mirror's `hit_triangle` lane by lane; a sphere through the mirror's `hit_prim`.
+/// Only the lanes in `mask` are meaningful.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn prim_lanes<O: Origins>(
+    g: &Globals<f32>,
+    ray: impl Fn(usize) -> Ray<f32>,
+    r: &Lanes<O>,
+    sh: &ShearLanes,
+    id: u32,
+    tri: Option<&Triangle>,
+    mask: Mask,
+    t_min: f32,
+    t_max: &[f32; LANES],
+) -> TriLanes {
+    let tri = tri.filter(|_| g.spec.has_triangles);
+    if let Some(tri) = tri
+        && g.spec.triangle_algo == TRIANGLE_WATERTIGHT
+    {
+        return watertight_lanes(tri, r, sh, mask, t_min, t_max);
+    }
+    let mut h = TriLanes {
+        t: [INFINITY; LANES],
+        u: [0.0; LANES],
+        v: [0.0; LANES],
+    };
+    let mut m = mask;
+    while m != 0 {
+        let l = m.trailing_zeros() as usize;
+        m &= m - 1;
+        (h.t[l], h.u[l], h.v[l]) = match tri {
+            // `hit_prim` of a triangle, with the triangle already in hand.
+            Some(tri) => hit_triangle(g, ray(l), sh.lane(l), tri, t_min, t_max[l]),
+            None => hit_prim(g, ray(l), sh.lane(l), id, t_min, t_max[l]),
+        };
+    }
+    h
+}
+
+/// The mirror's `prim_material` for one lane's hit; `tri` gives the hit triangle (from
+/// where the traversal read it) and is called only for a triangle.
+#[inline(always)]
+pub(super) fn prim_material<'a>(
+    g: &'a Globals<f32>,
+    hit: &Hit<f32>,
+    tri: impl FnOnce() -> &'a Triangle,
+) -> u32 {
+    if (hit.prim & TRIANGLE_BIT) != 0 {
+        return tri().material;
+    }
+    g.buf.spheres[hit.prim as usize].material
+}
+
+/// The mirror's `prim_normal` for one lane's hit at `p`, before its normalize (the shader
+/// normalizes lane-wise after, `normalize_lanes`); `tri` as in [`prim_material`].
+#[inline(always)]
+pub(super) fn prim_normal<'a>(
+    g: &'a Globals<f32>,
+    hit: &Hit<f32>,
+    p: [f32; 3],
+    tri: impl FnOnce() -> &'a Triangle,
+) -> [f32; 3] {
+    if (hit.prim & TRIANGLE_BIT) != 0 {
+        let tri = tri();
+        let e1 = [0, 1, 2].map(|k| tri.b[k] - tri.a[k]);
+        let e2 = [0, 1, 2].map(|k| tri.c[k] - tri.a[k]);
+        return [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ];
+    }
+    let c = g.buf.spheres[hit.prim as usize].center;
+    [p[0] - c[0], p[1] - c[1], p[2] - c[2]]
+}
+
+/// The leaf's own copy of primitive `id`, at slot `k` of `prim_ids`, when it is a
+/// triangle (what [`prim_lanes`] tests, in the memory the traversal is reading); `None`
+/// for a sphere.
+#[inline(always)]
+pub(super) fn leaf_triangle<'a>(g: &'a Globals<'a, f32>, id: u32, k: u32) -> Option<&'a Triangle> {
+    ((id & TRIANGLE_BIT) != 0).then(|| &g.buf.leaf_triangles[k as usize])
+}
