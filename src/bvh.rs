@@ -313,9 +313,15 @@ fn plan(refs: &mut [PrimRef], depth: usize, node: &Bounds) -> Plan {
         Some((_, axis, split)) => {
             let mut i = 0;
             let mut sides = [Bounds::EMPTY; 2];
+            // `bins_of(c, ..)[axis] < split` on the one axis, without the bin: the bin is
+            // the clamped x = (c - lo)·scale truncated, and for x ≥ 0 and a whole split,
+            // trunc(x) < split ⟺ x < split; a NaN x (bin 0) goes left, and x past the
+            // last bin never does (split ≤ BINS - 1). Same lane arithmetic, same answer.
+            let (lo, sc, edge) = (centres.lo[axis], scale[axis], split as f32);
             for j in 0..n {
                 let c = refs[j].centre();
-                if bins_of(c, centres.lo, scale)[axis] < split {
+                let right = (c[axis] - lo) * sc >= edge;
+                if !right {
                     sides[0].grow(&refs[j], c);
                     refs.swap(i, j);
                     i += 1;
