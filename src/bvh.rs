@@ -250,7 +250,8 @@ fn bounds_of(refs: &[PrimRef]) -> Bounds {
 }
 
 /// The bins of centre `c` on the three axes, for centres that start at `lo` with `scale`
-/// bins per unit; the same expression bins and partitions, so they agree.
+/// bins per unit. The partition in [`plan`] tests one axis without the bin, an equivalent
+/// comparison (see there).
 #[inline(always)]
 fn bins_of(c: Vec4, lo: Vec4, scale: Vec4) -> [usize; 3] {
     // Clamped to [0, BINS - 1] as floats first (a NaN becomes 0), which is what
@@ -447,6 +448,17 @@ fn build_part(refs: &mut [PrimRef], node: Bounds, offset: usize, depth: usize) -
     }
 }
 
+/// An interior node split on `axis`; its second child's index (`first`) is set once the
+/// first child's subtree is written.
+fn interior_node(bounds: &Aabb, axis: u32) -> BvhNode {
+    BvhNode {
+        lo: bounds.lo3(),
+        first: 0,
+        hi: bounds.hi3(),
+        count_axis: axis,
+    }
+}
+
 fn leaf_node(bounds: &Aabb, first: usize, count: usize) -> BvhNode {
     BvhNode {
         lo: bounds.lo3(),
@@ -477,12 +489,7 @@ fn build_flat(refs: &mut [PrimRef], node: Bounds, offset: usize, depth: usize, o
         Plan::Split { axis, mid, sides } => {
             debug_assert!(mid > 0 && mid < n);
             let at = out.nodes.len();
-            out.nodes.push(BvhNode {
-                lo: node.boxes.lo3(),
-                first: 0,
-                hi: node.boxes.hi3(),
-                count_axis: axis as u32,
-            });
+            out.nodes.push(interior_node(&node.boxes, axis as u32));
             let (left, right) = refs.split_at_mut(mid);
             build_flat(left, sides[0], offset, depth + 1, out);
             out.nodes[at].first = out.nodes.len() as u32;
@@ -548,12 +555,7 @@ fn flatten(part: Part, depth: usize, bvh: &mut Bvh) {
         } => {
             bvh.depth = bvh.depth.max(depth);
             let at = bvh.nodes.len();
-            bvh.nodes.push(BvhNode {
-                lo: bounds.lo3(),
-                first: 0,
-                hi: bounds.hi3(),
-                count_axis: axis,
-            });
+            bvh.nodes.push(interior_node(&bounds, axis));
             let (l, r) = *children;
             flatten(l, depth + 1, bvh);
             bvh.nodes[at].first = bvh.nodes.len() as u32;

@@ -90,6 +90,11 @@ pub fn disable() {
     *DIR.lock().unwrap_or_else(|e| e.into_inner()) = None;
 }
 
+/// Whether the cache is on (so a key is worth computing).
+pub fn enabled() -> bool {
+    dir().is_some()
+}
+
 /// Whether a value made from `primitives` primitives is worth an entry (the cache is on
 /// and the count reaches `GLINT_CACHE_MIN_PRIMS`, default 100,000).
 pub fn worth(primitives: usize) -> bool {
@@ -97,7 +102,7 @@ pub fn worth(primitives: usize) -> bool {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(DEFAULT_MIN_PRIMS);
-    dir().is_some() && primitives >= min
+    enabled() && primitives >= min
 }
 
 /// What the cache did so far in this process ("hit mesh", "stored bvh", warnings), and

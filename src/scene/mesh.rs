@@ -166,7 +166,7 @@ pub(super) fn load(
     let xf = mesh_transform(v, i, m)?;
     // A large mesh placed by glint's own reader may be in the cache (see `crate::cache`):
     // its key is the file's bytes, the transform and how normals are read.
-    let cache_key = m.material.as_ref().map(|_| {
+    let cache_key = (m.material.is_some() && crate::cache::enabled()).then(|| {
         let xf_bits: Vec<u8> = [xf.scale.to_array(), xf.translate.to_array()]
             .into_iter()
             .flatten()
