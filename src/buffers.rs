@@ -4,6 +4,8 @@
 
 pub use crate::kernel::layout::*;
 
+use rayon::prelude::*;
+
 use crate::bvh::Bvh;
 use crate::scene::{Model, Scene, TriangleAlgorithm};
 
@@ -176,7 +178,7 @@ impl SceneBuffers {
         let t_flat = std::time::Instant::now();
         let leaf_triangles: Vec<Triangle> = bvh
             .prim_ids
-            .iter()
+            .par_iter()
             .map(|&id| {
                 if (id & TRIANGLE_BIT) != 0 {
                     triangles[(id & !TRIANGLE_BIT) as usize]
@@ -341,7 +343,7 @@ fn flat_triangles(
 ) -> (Vec<Triangle>, Vec<VertexNormals>) {
     crate::stages::time("flatten", || {
         let mut triangles: Vec<Triangle> = scene_triangles
-            .iter()
+            .par_iter()
             .map(|t| Triangle {
                 a: t.vertices[0],
                 material: t.material,

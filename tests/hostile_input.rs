@@ -448,3 +448,33 @@ fn frames_stream_in_bands_and_what_cannot_fit_is_refused() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("a 1024x768 frame needs about"), "{err}");
 }
+
+/// The fast mesh path places every face in parallel: the error still names the first face
+/// (in file order) that fails, and why: a corner that is not finite in the file, or one
+/// the transform carries past f32.
+#[test]
+fn the_first_face_that_cannot_be_placed_is_named() {
+    let d = dir("place");
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1e20 0 0\nv nan 0 0\n\
+               f 1 2 3\nf 1 2 4\nf 1 4 3\nf 1 5 3\n";
+    std::fs::write(d.join("m.obj"), obj).unwrap();
+    let load = |name: &str, scale: f32| {
+        let p = d.join(format!("{name}.toml"));
+        std::fs::write(
+            &p,
+            format!(
+                "{HEAD}[[meshes]]\nfile = \"m.obj\"\nmaterial = \"m\"\nscale = [{scale:?}, 1.0, 1.0]\n"
+            ),
+        )
+        .unwrap();
+        Scene::load(&p).unwrap_err().to_string()
+    };
+    // Scaled by 1e20, face 1 is the first to overflow; unscaled, face 3's NaN is first.
+    let e = load("big", 1e20);
+    assert!(
+        e.contains("face 1: the transform overflows f32") && e.contains("m.obj"),
+        "{e}"
+    );
+    let e = load("nan", 1.0);
+    assert!(e.contains("face 3: a vertex is not finite"), "{e}");
+}

@@ -3,6 +3,7 @@
 
 use std::io::BufReader;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use super::format::MeshFile;
 use super::obj::{NO_NORMAL, Normals, Parsed};
@@ -259,17 +260,34 @@ pub(super) fn load(
                 use rayon::prelude::*;
                 let moved: Vec<[f32; 3]> =
                     parsed.vertices.par_iter().map(|&p| xf.apply(p)).collect();
-                parsed
+                // Gathered straight into place (an indexed collect: no partial lists to
+                // join, as collecting `Result`s would make), the first face that fails
+                // `check_placed` noted on the way. A position that is not finite is not
+                // finite once transformed either (inf·0 and NaN stay NaN), so checking
+                // the transformed corners finds every failing face.
+                let first_bad = AtomicUsize::new(usize::MAX);
+                let placed: Vec<Triangle> = parsed
                     .triangles
                     .par_iter()
                     .enumerate()
                     .map(|(f, ix)| {
-                        let ps = ix.map(|k| parsed.vertices[k as usize]);
-                        check_placed(ps, ix.map(|k| moved[k as usize]))
-                            .map(|vertices| Triangle { vertices, material })
-                            .map_err(|e| fail(format!("face {f}: {e}")))
+                        let vertices = ix.map(|k| moved[k as usize]);
+                        if vertices.iter().flatten().any(|x| !x.is_finite()) {
+                            first_bad.fetch_min(f, Ordering::Relaxed);
+                        }
+                        Triangle { vertices, material }
                     })
-                    .collect::<Result<_, _>>()?
+                    .collect();
+                let f = first_bad.into_inner();
+                if f != usize::MAX {
+                    let ix = parsed.triangles[f];
+                    let ps = ix.map(|k| parsed.vertices[k as usize]);
+                    // A corner is not finite, so `check_placed` says which way.
+                    if let Err(e) = check_placed(ps, ix.map(|k| moved[k as usize])) {
+                        return Err(fail(format!("face {f}: {e}")));
+                    }
+                }
+                placed
             };
             crate::stages::record("transform", t.elapsed());
             let corner = if normals == Normals::Read {

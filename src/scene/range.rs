@@ -17,6 +17,8 @@
 //! | watertight | `t_scaled` = U·Az + V·Bz + W·Cz ~ D³ | D ≤ 1e12 |
 //! | sphere | `disc` ~ D²·\|d\|², `r * r` | D ≤ 1e18, 1e-18 ≤ r ≤ 1e18 |
 
+use rayon::prelude::*;
+
 use super::{Scene, TriangleAlgorithm};
 
 /// Naive test: the longest edge it handles (`dot(cr, cr)` ~ E⁴ ≤ 1e36).
@@ -80,48 +82,50 @@ impl Scene {
                 ));
             }
         }
-        let mut t = 0;
+        // Why triangle `v` is outside the range, if it is (a string only then).
+        let why = |v: [[f32; 3]; 3]| -> Option<String> {
+            let e = (0..3)
+                .map(|i| dist(v[i], v[(i + 1) % 3]))
+                .fold(0.0, f64::max);
+            let d = v.iter().map(|&p| far(p)).fold(0.0, f64::max);
+            match algo {
+                TriangleAlgorithm::Naive if e > NAIVE_MAX_EDGE => {
+                    Some(format!("an edge of {e:.1e} > {NAIVE_MAX_EDGE:e}"))
+                }
+                TriangleAlgorithm::Naive if e > 0.0 && e < NAIVE_MIN_EDGE => {
+                    Some(format!("an edge of {e:.1e} < {NAIVE_MIN_EDGE:e}"))
+                }
+                TriangleAlgorithm::MollerTrumbore if e * e * d > MT_MAX_E2D => Some(format!(
+                    "edge² × distance {:.1e} > {MT_MAX_E2D:e}",
+                    e * e * d
+                )),
+                TriangleAlgorithm::MollerTrumbore if e > 0.0 && e < MT_MIN_EDGE => {
+                    Some(format!("an edge of {e:.1e} < {MT_MIN_EDGE:e}"))
+                }
+                TriangleAlgorithm::Watertight if d > WATERTIGHT_MAX_DIST => Some(format!(
+                    "{d:.1e} from a ray origin > {WATERTIGHT_MAX_DIST:e}"
+                )),
+                _ => None,
+            }
+        };
         for (g, (first, src)) in self.triangle_sources.iter().enumerate() {
             let end = self
                 .triangle_sources
                 .get(g + 1)
                 .map_or(self.triangles.len(), |n| n.0);
-            let mut bad = 0usize;
-            let mut example = String::new();
-            while t < end {
-                let v = self.triangles[t].vertices;
-                let e = (0..3)
-                    .map(|i| dist(v[i], v[(i + 1) % 3]))
-                    .fold(0.0, f64::max);
-                let d = v.iter().map(|&p| far(p)).fold(0.0, f64::max);
-                let why = match algo {
-                    TriangleAlgorithm::Naive if e > NAIVE_MAX_EDGE => {
-                        Some(format!("an edge of {e:.1e} > {NAIVE_MAX_EDGE:e}"))
-                    }
-                    TriangleAlgorithm::Naive if e > 0.0 && e < NAIVE_MIN_EDGE => {
-                        Some(format!("an edge of {e:.1e} < {NAIVE_MIN_EDGE:e}"))
-                    }
-                    TriangleAlgorithm::MollerTrumbore if e * e * d > MT_MAX_E2D => Some(format!(
-                        "edge² × distance {:.1e} > {MT_MAX_E2D:e}",
-                        e * e * d
-                    )),
-                    TriangleAlgorithm::MollerTrumbore if e > 0.0 && e < MT_MIN_EDGE => {
-                        Some(format!("an edge of {e:.1e} < {MT_MIN_EDGE:e}"))
-                    }
-                    TriangleAlgorithm::Watertight if d > WATERTIGHT_MAX_DIST => Some(format!(
-                        "{d:.1e} from a ray origin > {WATERTIGHT_MAX_DIST:e}"
-                    )),
-                    _ => None,
-                };
-                if let Some(why) = why {
-                    if bad == 0 {
-                        example = format!("triangle {} of it: {why}", t - first);
-                    }
-                    bad += 1;
-                }
-                t += 1;
-            }
+            // Each group's triangles in parallel: how many are outside, and the first.
+            let (bad, first_bad) = self.triangles[*first..end]
+                .par_iter()
+                .enumerate()
+                .filter(|(_, t)| why(t.vertices).is_some())
+                .map(|(k, _)| (1usize, k))
+                .reduce(|| (0, usize::MAX), |a, b| (a.0 + b.0, a.1.min(b.1)));
             if bad > 0 {
+                let t = &self.triangles[first + first_bad];
+                let example = format!(
+                    "triangle {first_bad} of it: {}",
+                    why(t.vertices).unwrap_or_default()
+                );
                 out.push(format!(
                     "{src}: {bad} triangle(s) outside the f32-safe range of the {algo} test \
                      ({example}): they may not be drawn (render with --backend cpu-f64 to see them)"
