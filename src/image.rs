@@ -57,6 +57,22 @@ pub fn to_u8(x: f32) -> u8 {
     (c * 255.0 + 0.5) as u8
 }
 
+/// The 8-bit RGB bytes of `[r, g, b, t]` pixels (`to_u8` of each channel), in parallel.
+fn rgb8(pixels: &[[f32; 4]]) -> Vec<u8> {
+    use rayon::prelude::*;
+    const CHUNK: usize = 4096;
+    let mut bytes = vec![0u8; pixels.len() * 3];
+    bytes
+        .par_chunks_mut(3 * CHUNK)
+        .zip(pixels.par_chunks(CHUNK))
+        .for_each(|(out, px)| {
+            for (o, p) in out.chunks_exact_mut(3).zip(px) {
+                o.copy_from_slice(&[to_u8(p[0]), to_u8(p[1]), to_u8(p[2])]);
+            }
+        });
+    bytes
+}
+
 impl Image {
     /// A `width`×`height` image filled with `fill`.
     pub fn new(width: u32, height: u32, fill: [f32; 4]) -> Self {
@@ -69,10 +85,7 @@ impl Image {
 
     /// The 8-bit RGB bytes, as written to the PNG.
     pub fn to_rgb8(&self) -> Vec<u8> {
-        self.pixels
-            .iter()
-            .flat_map(|p| [to_u8(p[0]), to_u8(p[1]), to_u8(p[2])])
-            .collect()
+        rgb8(&self.pixels)
     }
 
     /// Whether some pixel's colour differs from another's (a blank image has one colour).
@@ -154,10 +167,7 @@ impl PngStream {
     pub fn write_rows(&mut self, pixels: &[[f32; 4]]) -> Result<(), ImageError> {
         use std::io::Write;
         let rows = (pixels.len() / self.width.max(1) as usize) as u32;
-        let bytes: Vec<u8> = pixels
-            .iter()
-            .flat_map(|p| [to_u8(p[0]), to_u8(p[1]), to_u8(p[2])])
-            .collect();
+        let bytes = rgb8(pixels);
         let w = self.writer.as_mut().expect("not finished");
         w.write_all(&bytes).map_err(|error| ImageError::Io {
             path: self.path.clone(),

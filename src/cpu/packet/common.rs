@@ -20,9 +20,11 @@ pub const PACKET_H: u32 = 2;
 /// A bit per lane.
 pub type Mask = u8;
 
-/// Where the lanes' rays start: `rel(p, l)` is `p - origin` of lane l, per component.
+/// Where the lanes' rays start: `rel(p, l)` is `p - origin` of lane l, per component, and
+/// `from(p, l)` is `origin - p`.
 pub(super) trait Origins {
     fn rel(&self, p: &[f32; 3], l: usize) -> [f32; 3];
+    fn from(&self, p: &[f32; 3], l: usize) -> [f32; 3];
 }
 
 /// One origin for every lane (camera rays): LLVM hoists `rel` out of the lane loops.
@@ -32,6 +34,10 @@ impl Origins for Shared {
     #[inline(always)]
     fn rel(&self, p: &[f32; 3], _l: usize) -> [f32; 3] {
         [p[0] - self.0.x, p[1] - self.0.y, p[2] - self.0.z]
+    }
+    #[inline(always)]
+    fn from(&self, p: &[f32; 3], _l: usize) -> [f32; 3] {
+        [self.0.x - p[0], self.0.y - p[1], self.0.z - p[2]]
     }
 }
 
@@ -47,14 +53,26 @@ impl Origins for PerLane {
             p[2] - self.0[2][l],
         ]
     }
+    #[inline(always)]
+    fn from(&self, p: &[f32; 3], l: usize) -> [f32; 3] {
+        [
+            self.0[0][l] - p[0],
+            self.0[1][l] - p[1],
+            self.0[2][l] - p[2],
+        ]
+    }
 }
 
-/// Rays with their reciprocal directions as structure of arrays.
+/// Rays with their directions, reciprocal directions and `dir · dir` as structure of
+/// arrays.
 pub(super) struct Lanes<O> {
     pub(super) origin: O,
+    pub(super) dir: [[f32; LANES]; 3],
     pub(super) ix: [f32; LANES],
     pub(super) iy: [f32; LANES],
     pub(super) iz: [f32; LANES],
+    /// `dir.dot(dir)` of each lane (`V3::dot`'s order).
+    pub(super) dd: [f32; LANES],
 }
 
 impl<O> Lanes<O> {
@@ -63,14 +81,17 @@ impl<O> Lanes<O> {
     pub(super) fn new(origin: O, dir: &[[f32; LANES]; 3]) -> Self {
         let mut r = Lanes {
             origin,
+            dir: *dir,
             ix: [0.0; LANES],
             iy: [0.0; LANES],
             iz: [0.0; LANES],
+            dd: [0.0; LANES],
         };
         for l in 0..LANES {
             r.ix[l] = 1.0 / dir[0][l];
             r.iy[l] = 1.0 / dir[1][l];
             r.iz[l] = 1.0 / dir[2][l];
+            r.dd[l] = dot_lane(dir, dir, l);
         }
         r
     }

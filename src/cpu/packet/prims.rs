@@ -6,8 +6,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::common::{LANES, Lanes, Mask, Origins, mask_of};
-use crate::buffers::{INFINITY, TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle};
-use crate::cpu::common::{Globals, Hit, Ray, in_interval};
+use crate::buffers::{INFINITY, Sphere, TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle};
+use crate::cpu::common::{Globals, Hit, Ray, in_interval, sign_nonneg};
 use crate::cpu::prims::{Shear, edge_function, hit_prim, hit_triangle};
 
 /// The lanes' `Shear`s as structure of arrays.
@@ -181,6 +181,45 @@ pub(super) fn watertight_lanes<O: Origins>(
     out
 }
 
+/// `hit_sphere` of `s` for every lane, lane l against `t_max[l]` (INFINITY on a miss): the
+/// same operations in the same order, lane by lane, its early return on `disc` as a
+/// select (a lane that misses computes a NaN root it never uses).
+#[inline(always)]
+pub(super) fn sphere_lanes<O: Origins>(
+    s: &Sphere,
+    r: &Lanes<O>,
+    t_min: f32,
+    t_max: &[f32; LANES],
+) -> [f32; LANES] {
+    let mut out = [INFINITY; LANES];
+    let radius = s.radius;
+    for l in 0..LANES {
+        let f = r.origin.from(&s.center, l);
+        let d = [r.dir[0][l], r.dir[1][l], r.dir[2][l]];
+        let a = r.dd[l];
+        let b = -(f[0] * d[0] + f[1] * d[1] + f[2] * d[2]);
+        let k = b / a;
+        let perp = [f[0] + d[0] * k, f[1] + d[1] * k, f[2] + d[2] * k];
+        let r2 = radius * radius;
+        let disc = a * (r2 - (perp[0] * perp[0] + perp[1] * perp[1] + perp[2] * perp[2]));
+        let c = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) - r2;
+        let q = b + sign_nonneg(b) * disc.sqrt();
+        let t0 = c / q;
+        let t1 = q / a;
+        let near = if t0 < t1 { t0 } else { t1 };
+        let far = if t0 < t1 { t1 } else { t0 };
+        let t = if in_interval(near, t_min, t_max[l]) {
+            near
+        } else if in_interval(far, t_min, t_max[l]) {
+            far
+        } else {
+            INFINITY
+        };
+        out[l] = if disc >= 0.0 { t } else { INFINITY };
+    }
+    out
+}
+
 /// `hit_prim` of primitive `id` for the lanes in `mask`, lane l against `t_max[l]`; `tri`
 /// is its triangle when it is one (`triangles[id]` or its copy in `leaf_triangles`). A
 /// triangle goes through `watertight_lanes` under the watertight algorithm, else through
@@ -210,6 +249,12 @@ pub(super) fn prim_lanes<O: Origins>(
         u: [0.0; LANES],
         v: [0.0; LANES],
     };
+    if (id & TRIANGLE_BIT) == 0 {
+        if g.spec.has_spheres {
+            h.t = sphere_lanes(&g.buf.spheres[id as usize], r, t_min, t_max);
+        }
+        return h;
+    }
     let mut m = mask;
     while m != 0 {
         let l = m.trailing_zeros() as usize;

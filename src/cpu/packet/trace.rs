@@ -8,7 +8,7 @@ use super::common::{
     LANES, Lanes, Mask, Origins, PACKET_W, PerLane, Shared, dot_lane, mask_of, normalize_lanes,
 };
 use super::prims::{
-    ShearLanes, leaf_triangle, prim_lanes, prim_material, prim_normal, shear_lanes,
+    ShearLanes, leaf_triangle, prim_lanes, prim_material, prim_normal, shear_lanes, sphere_lanes,
     watertight_lanes,
 };
 use crate::buffers::{
@@ -16,7 +16,7 @@ use crate::buffers::{
     TRIANGLE_WATERTIGHT, Triangle,
 };
 use crate::cpu::common::{BVH_STACK, Globals, Hit, Ray, clamp01, max0};
-use crate::cpu::prims::{hit_prim, hit_sphere, shading_at};
+use crate::cpu::prims::{hit_prim, shading_at};
 use crate::cpu::trace::{
     finite_bound, nearer, phong_power, sample_offset, shadow_origin, tie_bound,
 };
@@ -110,43 +110,62 @@ pub(super) fn closest_hit_all_lanes(
     best: &mut [Hit<f32>; LANES],
 ) {
     if g.spec.has_spheres {
+        // Each lane's nearest t and sphere so far, as arrays (misses keep t_max).
+        let mut bt: [f32; LANES] = std::array::from_fn(|l| best[l].t);
+        let mut bp = [PRIM_NONE; LANES];
         for k in 0..g.buf.params.n_spheres {
-            let s = &g.buf.spheres[k as usize];
-            let mut m = mask;
-            while m != 0 {
-                let l = m.trailing_zeros() as usize;
-                m &= m - 1;
-                let t = hit_sphere(rays[l], s, t_min, best[l].t);
-                if t < best[l].t {
-                    best[l] = Hit {
-                        t,
-                        prim: k,
-                        u: 0.0,
-                        v: 0.0,
-                    };
-                }
+            let t = sphere_lanes(&g.buf.spheres[k as usize], r, t_min, &bt);
+            for l in 0..LANES {
+                let nearer = t[l] < bt[l];
+                bt[l] = if nearer { t[l] } else { bt[l] };
+                bp[l] = if nearer { k } else { bp[l] };
+            }
+        }
+        let mut m = mask;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            if bp[l] != PRIM_NONE {
+                best[l] = Hit {
+                    t: bt[l],
+                    prim: bp[l],
+                    u: 0.0,
+                    v: 0.0,
+                };
             }
         }
     }
     if g.spec.has_triangles {
+        // As for spheres: each lane's nearest (t, prim, u, v) so far, as arrays.
+        let mut bt = [0.0f32; LANES];
+        let mut bp = [PRIM_NONE; LANES];
+        let mut bu = [0.0f32; LANES];
+        let mut bv = [0.0f32; LANES];
+        for l in 0..LANES {
+            (bt[l], bp[l], bu[l], bv[l]) = (best[l].t, best[l].prim, best[l].u, best[l].v);
+        }
         for k in 0..g.buf.params.n_triangles {
             let tri = &g.buf.triangles[k as usize];
-            let t_max: [f32; LANES] = std::array::from_fn(|l| best[l].t);
             let id = k | TRIANGLE_BIT;
-            let h = prim_lanes(g, |l| rays[l], r, sh, id, Some(tri), mask, t_min, &t_max);
-            let mut m = mask;
-            while m != 0 {
-                let l = m.trailing_zeros() as usize;
-                m &= m - 1;
-                if h.t[l] < best[l].t {
-                    best[l] = Hit {
-                        t: h.t[l],
-                        prim: id,
-                        u: h.u[l],
-                        v: h.v[l],
-                    };
-                }
+            let h = prim_lanes(g, |l| rays[l], r, sh, id, Some(tri), mask, t_min, &bt);
+            for l in 0..LANES {
+                let nearer = h.t[l] < bt[l];
+                bt[l] = if nearer { h.t[l] } else { bt[l] };
+                bp[l] = if nearer { id } else { bp[l] };
+                bu[l] = if nearer { h.u[l] } else { bu[l] };
+                bv[l] = if nearer { h.v[l] } else { bv[l] };
             }
+        }
+        let mut m = mask;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            best[l] = Hit {
+                t: bt[l],
+                prim: bp[l],
+                u: bu[l],
+                v: bv[l],
+            };
         }
     }
 }
@@ -251,6 +270,15 @@ pub(super) fn occluded_lanes(
             let h = watertight_lanes(tri, &r, &sh, m, t_min, &bound);
             for l in 0..LANES {
                 out |= (((m >> l) & 1 != 0 && id != skip[l] && h.t[l] < t_max) as Mask) << l;
+            }
+            return out;
+        }
+        if (id & TRIANGLE_BIT) == 0 {
+            if g.spec.has_spheres {
+                let t = sphere_lanes(&g.buf.spheres[id as usize], &r, t_min, &bound);
+                for l in 0..LANES {
+                    out |= (((m >> l) & 1 != 0 && id != skip[l] && t[l] < t_max) as Mask) << l;
+                }
             }
             return out;
         }
@@ -546,10 +574,12 @@ pub(super) fn shade_lanes(
         }
         &g.buf.triangles[(hits[l].prim & !TRIANGLE_BIT) as usize]
     };
-    let mats: [&Material; LANES] = std::array::from_fn(|l| {
+    // A loop, not `array::from_fn`: that was left a call of its own (5 % of the frame).
+    let mut mats: [&Material; LANES] = [&g.buf.materials[0]; LANES];
+    for l in 0..LANES {
         let material = prim_material(g, &hits[src(l)], || tri_of(src(l)));
-        &g.buf.materials[material as usize]
-    });
+        mats[l] = &g.buf.materials[material as usize];
+    }
     let o = g.cam.eye;
     let mut p = [[0.0f32; LANES]; 3];
     let mut nv = [[0.0f32; LANES]; 3];
