@@ -296,11 +296,18 @@ pub(super) fn occluded_lanes(
         // `occluded_all`: spheres, then triangles, each lane until it is blocked.
         let mut open = mask;
         if g.spec.has_spheres {
+            // Written out here, not through `test`: that closure is not inlined, and this
+            // loop is most of a scene of spheres' shadow rays.
             for k in 0..g.buf.params.n_spheres {
                 if open == 0 {
                     break;
                 }
-                open &= !test(k, None, open);
+                let t = sphere_lanes(&g.buf.spheres[k as usize], &r, t_min, &bound);
+                let mut hit = [false; LANES];
+                for l in 0..LANES {
+                    hit[l] = k != skip[l] && t[l] < t_max;
+                }
+                open &= !mask_of(&hit);
             }
         }
         if g.spec.has_triangles {
