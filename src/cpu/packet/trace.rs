@@ -114,7 +114,7 @@ pub(super) fn closest_hit_all_lanes(
         let mut bt: [f32; LANES] = std::array::from_fn(|l| best[l].t);
         let mut bp = [PRIM_NONE; LANES];
         for k in 0..g.buf.params.n_spheres {
-            let t = sphere_lanes(&g.buf.spheres[k as usize], r, t_min, &bt);
+            let t = sphere_lanes(&g.buf.spheres[k as usize], r, mask, false, t_min, &bt);
             for l in 0..LANES {
                 let nearer = t[l] < bt[l];
                 bt[l] = if nearer { t[l] } else { bt[l] };
@@ -275,7 +275,7 @@ pub(super) fn occluded_lanes(
         }
         if (id & TRIANGLE_BIT) == 0 {
             if g.spec.has_spheres {
-                let t = sphere_lanes(&g.buf.spheres[id as usize], &r, t_min, &bound);
+                let t = sphere_lanes(&g.buf.spheres[id as usize], &r, m, true, t_min, &bound);
                 for l in 0..LANES {
                     out |= (((m >> l) & 1 != 0 && id != skip[l] && t[l] < t_max) as Mask) << l;
                 }
@@ -302,7 +302,7 @@ pub(super) fn occluded_lanes(
                 if open == 0 {
                     break;
                 }
-                let t = sphere_lanes(&g.buf.spheres[k as usize], &r, t_min, &bound);
+                let t = sphere_lanes(&g.buf.spheres[k as usize], &r, open, true, t_min, &bound);
                 let mut hit = [false; LANES];
                 for l in 0..LANES {
                     hit[l] = k != skip[l] && t[l] < t_max;
