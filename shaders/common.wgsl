@@ -159,6 +159,8 @@ struct HitOut {
 @group(0) @binding(8) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(9) var<storage, read> prim_ids: array<u32>;
 @group(0) @binding(10) var<storage, read> normals: array<VertexNormals>;
+/// The lean frame (`render_rgba8`): each pixel's colour as `pack_rgba8` gives it.
+@group(0) @binding(14) var<storage, read_write> image_rgba8: array<u32>;
 
 // ---- small helpers ---------------------------------------------------------------------
 
@@ -187,6 +189,17 @@ fn max2(a: f32, b: f32) -> f32 {
 /// `x` clamped to [0, 1] (NaN gives 0).
 fn clamp01(x: f32) -> f32 {
     return select(select(x, 1.0, x > 1.0), 0.0, !(x > 0.0));
+}
+
+/// One channel to 8 bits, as the PNG holds it: clamped to [0, 1] (NaN gives 0), scaled
+/// by 255, rounded half up.
+fn to_u8(x: f32) -> u32 {
+    return u32(clamp01(x) * 255.0 + 0.5);
+}
+
+/// A colour as four bytes, red in the lowest: `to_u8` of r, g, b, and an opaque alpha.
+fn pack_rgba8(c: vec4<f32>) -> u32 {
+    return to_u8(c.x) | (to_u8(c.y) << 8u) | (to_u8(c.z) << 16u) | (255u << 24u);
 }
 
 /// `a × b`, written out so that both tracers round the same products.

@@ -395,6 +395,17 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     image[gid.y * params.tile_width + gid.x] = trace_pixel(params.tile_x + gid.x, params.tile_y + gid.y);
 }
 
+/// `render` for an 8-bit image (PNG output): a quarter of the bytes written and read back,
+/// each pixel `pack_rgba8` of its colour.
+@compute @workgroup_size(8, 8, 1)
+fn render_rgba8(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= params.tile_width || gid.y >= params.tile_height {
+        return;
+    }
+    let c = trace_pixel(params.tile_x + gid.x, params.tile_y + gid.y);
+    image_rgba8[gid.y * params.tile_width + gid.x] = pack_rgba8(c);
+}
+
 /// One invocation per query ray: the nearest hit, as `closest_hit` gives it.
 @compute @workgroup_size(64, 1, 1)
 fn query(@builtin(global_invocation_id) gid: vec3<u32>) {

@@ -47,15 +47,8 @@ pub enum ImageError {
     },
 }
 
-/// One channel to 8 bits: clamp to [0, 1] (NaN is 0), scale by 255, round half up.
-pub fn to_u8(x: f32) -> u8 {
-    let c = if x > 0.0 {
-        if x < 1.0 { x } else { 1.0 }
-    } else {
-        0.0
-    };
-    (c * 255.0 + 0.5) as u8
-}
+/// One channel to 8 bits (the mirror's `to_u8`, the shader's quantisation).
+pub use crate::cpu::common::to_u8;
 
 /// The 8-bit RGB bytes of `[r, g, b, t]` pixels (`to_u8` of each channel), in parallel.
 fn rgb8(pixels: &[[f32; 4]]) -> Vec<u8> {
@@ -165,16 +158,33 @@ impl PngStream {
 
     /// Appends whole rows (`[r, g, b, t]` pixels, as [`Image::pixels`]), top to bottom.
     pub fn write_rows(&mut self, pixels: &[[f32; 4]]) -> Result<(), ImageError> {
+        self.write_bytes(&rgb8(pixels), pixels.len())
+    }
+
+    /// Appends the RGB `bytes` of `pixels` pixels (whole rows).
+    fn write_bytes(&mut self, bytes: &[u8], pixels: usize) -> Result<(), ImageError> {
         use std::io::Write;
-        let rows = (pixels.len() / self.width.max(1) as usize) as u32;
-        let bytes = rgb8(pixels);
+        let rows = (pixels / self.width.max(1) as usize) as u32;
         let w = self.writer.as_mut().expect("not finished");
-        w.write_all(&bytes).map_err(|error| ImageError::Io {
+        w.write_all(bytes).map_err(|error| ImageError::Io {
             path: self.path.clone(),
             error,
         })?;
         self.rows_left = self.rows_left.saturating_sub(rows);
         Ok(())
+    }
+
+    /// Appends whole rows of packed pixels (`pack_rgba8`: red in the lowest byte), top to
+    /// bottom: the lean frame's readback, written as it came.
+    pub fn write_rgba8_rows(&mut self, pixels: &[u32]) -> Result<(), ImageError> {
+        let bytes: Vec<u8> = pixels
+            .iter()
+            .flat_map(|p| {
+                let [r, g, b, _] = p.to_le_bytes();
+                [r, g, b]
+            })
+            .collect();
+        self.write_bytes(&bytes, pixels.len())
     }
 
     /// Ends the PNG (every row must have been written) and renames it over the output.

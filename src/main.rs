@@ -440,19 +440,36 @@ fn run(cli: Cli) -> Result<()> {
                         gpu.compute_kernel(spec)?
                     };
                     let mut written: Result<(), glint::image::ImageError> = Ok(());
-                    let result = kernel.render_bands(
-                        &gpu.device,
-                        &gpu.queue,
-                        &buf,
-                        spec,
-                        band,
-                        &mut |y, px| {
-                            if written.is_ok() {
-                                written = glint::stages::time("encode", || sink.write_rows(px));
-                            }
-                            bar.show(y + (px.len() / w as usize) as u32, h);
-                        },
-                    );
+                    let result = match &mut sink {
+                        // A PNG holds 8 bits a channel: the shader packs them (the lean frame).
+                        Sink::Png(png) => kernel.render_bands_rgba8(
+                            &gpu.device,
+                            &gpu.queue,
+                            &buf,
+                            spec,
+                            band,
+                            &mut |y, px| {
+                                if written.is_ok() {
+                                    written =
+                                        glint::stages::time("encode", || png.write_rgba8_rows(px));
+                                }
+                                bar.show(y + (px.len() / w as usize) as u32, h);
+                            },
+                        ),
+                        Sink::Exr(..) => kernel.render_bands(
+                            &gpu.device,
+                            &gpu.queue,
+                            &buf,
+                            spec,
+                            band,
+                            &mut |y, px| {
+                                if written.is_ok() {
+                                    written = glint::stages::time("encode", || sink.write_rows(px));
+                                }
+                                bar.show(y + (px.len() / w as usize) as u32, h);
+                            },
+                        ),
+                    };
                     match result {
                         Ok(t) => {
                             written?;

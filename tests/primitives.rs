@@ -86,3 +86,121 @@ fn gpu_arithmetic_matches_rust_bit_for_bit() {
         eprintln!("adapter {}: {msg} (reported only)", gpu.describe());
     }
 }
+
+/// The shader's own `clamp01`, `to_u8` and `pack_rgba8`, cut from the kernel's source.
+fn quantisation_source() -> String {
+    let src = glint::gpu::SHADER_SOURCE;
+    let cut = |name: &str| {
+        let start = src
+            .find(&format!("fn {name}("))
+            .unwrap_or_else(|| panic!("the kernel has no {name}"));
+        let end = start + src[start..].find("\n}\n").expect("the function's end") + 3;
+        src[start..end].to_string()
+    };
+    let mut s = String::new();
+    for name in ["clamp01", "to_u8", "pack_rgba8"] {
+        s += &cut(name);
+    }
+    s + r#"
+@group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> output: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if i >= arrayLength(&input) / 2u { return; }
+    let c = input[i];
+    let p = pack_rgba8(c);
+    output[i] = vec4<f32>(f32(to_u8(c.w)), f32(p & 0xFFu), f32((p >> 8u) & 0xFFFFu), f32(p >> 24u));
+}
+"#
+}
+
+/// The lean frame's quantisation: the shader's `to_u8` and `pack_rgba8` give the mirror's
+/// bytes for the values where rounding turns (k + ½)/255 and its neighbours), the ends of
+/// [0, 1] and past them, ±0, NaN, infinities, subnormals and random values.
+#[test]
+fn quantisation_matches_the_mirror_bit_for_bit() {
+    let Some(gpu) = common::gpu() else { return };
+    let bad = quantisation_mismatches(gpu, &quantisation_source());
+    assert!(bad.is_empty(), "{} differ; first: {:?}", bad.len(), bad[0]);
+    assert_eq!(
+        glint::cpu::common::pack_rgba8([1.0, 0.5, 0.0, -1.0]),
+        0xFF00_80FF,
+        "red lowest, alpha opaque"
+    );
+}
+
+/// The twin: a shader that rounds at 0.4999 instead of one half is caught.
+#[test]
+fn quantisation_check_catches_another_rounding() {
+    let Some(gpu) = common::gpu() else { return };
+    let src = quantisation_source();
+    let off = src.replacen("* 255.0 + 0.5", "* 255.0 + 0.4999", 1);
+    assert_ne!(off, src, "the rounding was not found in the kernel");
+    assert!(!quantisation_mismatches(gpu, &off).is_empty());
+}
+
+/// (input, mirror, shader) for each probe value whose bytes differ under `src`.
+#[allow(clippy::type_complexity)]
+fn quantisation_mismatches(
+    gpu: &glint::gpu::Gpu,
+    src: &str,
+) -> Vec<([f32; 4], [f32; 4], [f32; 4])> {
+    use glint::cpu::common::{pack_rgba8, to_u8};
+    let mut values = vec![
+        0.0f32,
+        -0.0,
+        1.0,
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::MIN_POSITIVE,
+        1e-40,
+        -1e-40,
+        f32::MAX,
+        -1.0,
+        2.0,
+    ];
+    for k in 0..=256u32 {
+        for x in [k as f32 / 255.0, (k as f32 + 0.5) / 255.0] {
+            for d in -2i32..=2 {
+                values.push(f32::from_bits(x.to_bits().wrapping_add_signed(d)));
+            }
+        }
+    }
+    let mut rng = common::Rng::new(11);
+    for _ in 0..4000 {
+        values.push(rng.range(-0.25, 1.25));
+    }
+    // Each value in every channel position: as w (`to_u8` alone) and as r, g, b.
+    let input: Vec<[f32; 4]> = values
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| {
+            [
+                v,
+                values[(i + 1) % values.len()],
+                values[(i + 7) % values.len()],
+                v,
+            ]
+        })
+        .collect();
+    // `run_probe` dispatches one invocation per two input vec4s: padded to twice the length.
+    let padded = [input.clone(), vec![[0.0; 4]; input.len()]].concat();
+    let out = common::run_probe(gpu, src, &padded, input.len());
+    let mut bad = Vec::new();
+    for (c, o) in input.iter().zip(&out) {
+        let p = pack_rgba8(*c);
+        let want = [
+            to_u8(c[3]) as f32,
+            (p & 0xFF) as f32,
+            ((p >> 8) & 0xFFFF) as f32,
+            (p >> 24) as f32,
+        ];
+        if want != *o {
+            bad.push((*c, want, *o));
+        }
+    }
+    bad
+}

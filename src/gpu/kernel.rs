@@ -39,8 +39,13 @@ pub struct GpuTimings {
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
 enum Entry {
     Render,
+    /// `render_rgba8`: the lean frame.
+    RenderRgba8,
     Query,
 }
+
+/// Where `render_rgba8` writes (`image_rgba8` in the shader).
+const RGBA8_BINDING: u32 = 14;
 
 /// The shader module with its layouts and a cache of specialised pipelines.
 pub struct Kernel {
@@ -48,8 +53,10 @@ pub struct Kernel {
     packet: bool,
     module: wgpu::ShaderModule,
     render_layout: wgpu::BindGroupLayout,
+    rgba8_layout: wgpu::BindGroupLayout,
     query_layout: wgpu::BindGroupLayout,
     render_pipeline_layout: wgpu::PipelineLayout,
+    rgba8_pipeline_layout: wgpu::PipelineLayout,
     query_pipeline_layout: wgpu::PipelineLayout,
     pipelines: Mutex<HashMap<(Specialisation, Entry), wgpu::ComputePipeline>>,
 }
@@ -172,7 +179,6 @@ impl Kernel {
                 source: wgpu::ShaderSource::Wgsl(source),
             });
             let mut render = scene_entries();
-            render.push(storage_entry(5, false));
             render.push(storage_entry(NORMALS_BINDING, true));
             let mut query = scene_entries();
             query.push(storage_entry(6, true));
@@ -204,7 +210,9 @@ impl Kernel {
                     entries,
                 })
             };
-            let render_layout = layout("render", &render);
+            let with = |binding| [render.clone(), vec![storage_entry(binding, false)]].concat();
+            let render_layout = layout("render", &with(5));
+            let rgba8_layout = layout("render_rgba8", &with(RGBA8_BINDING));
             let query_layout = layout("query", &query);
             let pl = |bgl: &wgpu::BindGroupLayout| {
                 device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -217,9 +225,11 @@ impl Kernel {
                 ray_query,
                 packet,
                 render_pipeline_layout: pl(&render_layout),
+                rgba8_pipeline_layout: pl(&rgba8_layout),
                 query_pipeline_layout: pl(&query_layout),
                 module,
                 render_layout,
+                rgba8_layout,
                 query_layout,
                 pipelines: Mutex::new(HashMap::new()),
             }
@@ -248,11 +258,13 @@ impl Kernel {
                 label: Some("trace"),
                 layout: Some(match entry {
                     Entry::Render => &self.render_pipeline_layout,
+                    Entry::RenderRgba8 => &self.rgba8_pipeline_layout,
                     Entry::Query => &self.query_pipeline_layout,
                 }),
                 module: &self.module,
                 entry_point: Some(match entry {
                     Entry::Render => "render",
+                    Entry::RenderRgba8 => "render_rgba8",
                     Entry::Query => "query",
                 }),
                 compilation_options: wgpu::PipelineCompilationOptions {
@@ -390,9 +402,46 @@ impl Kernel {
         max_rows: u32,
         band: &mut dyn FnMut(u32, &[[f32; 4]]),
     ) -> Result<GpuTimings, GpuError> {
+        self.bands(device, queue, buf, spec, Entry::Render, max_rows, band)
+    }
+
+    /// [`Kernel::render_bands`] for an 8-bit image, the lean frame: each pixel is
+    /// `pack_rgba8` of its colour (red in the lowest byte), packed by the shader, so a
+    /// quarter of the bytes are written and read back. The bytes are the mirror's
+    /// `pack_rgba8` of the f32 frame's pixels (`tests/gpu_vs_cpu.rs`).
+    pub fn render_bands_rgba8(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &SceneBuffers,
+        spec: Specialisation,
+        max_rows: u32,
+        band: &mut dyn FnMut(u32, &[u32]),
+    ) -> Result<GpuTimings, GpuError> {
+        self.bands(device, queue, buf, spec, Entry::RenderRgba8, max_rows, band)
+    }
+
+    /// The render entry point `entry` in tiles, each tile's pixels (of type `T`, as that
+    /// entry point writes them) handed to `band`.
+    #[allow(clippy::too_many_arguments)]
+    fn bands<T: Pod>(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &SceneBuffers,
+        spec: Specialisation,
+        entry: Entry,
+        max_rows: u32,
+        band: &mut dyn FnMut(u32, &[T]),
+    ) -> Result<GpuTimings, GpuError> {
         let (width, height) = (buf.params.width, buf.params.height);
         let mut timings = GpuTimings::default();
-        let (pipeline, compile) = self.pipeline(device, spec, Entry::Render)?;
+        let (pipeline, compile) = self.pipeline(device, spec, entry)?;
+        let (out_binding, layout) = match entry {
+            Entry::RenderRgba8 => (RGBA8_BINDING, &self.rgba8_layout),
+            _ => (5, &self.render_layout),
+        };
+        let px_bytes = size_of::<T>() as u64;
         timings.compile = compile;
 
         let t0 = Instant::now();
@@ -407,7 +456,7 @@ impl Kernel {
         let rows = tile_rows(device, width, height)
             .min(by_work)
             .min(max_rows.max(1));
-        let tile_bytes = rows as u64 * width as u64 * 16;
+        let tile_bytes = rows as u64 * width as u64 * px_bytes;
         check_size(device, "one tile of the image", tile_bytes)?;
         let (scene, normals, output, staging) =
             scoped(device, "upload", || -> Result<_, GpuError> {
@@ -436,7 +485,7 @@ impl Kernel {
         timings.accel = accel.as_ref().map_or(Duration::ZERO, |a| a.build);
         let mut entries = self.scene_bindings(&scene, accel.as_ref());
         entries.push(wgpu::BindGroupEntry {
-            binding: 5,
+            binding: out_binding,
             resource: output.as_entire_binding(),
         });
         entries.push(wgpu::BindGroupEntry {
@@ -445,7 +494,7 @@ impl Kernel {
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("render"),
-            layout: &self.render_layout,
+            layout,
             entries: &entries,
         });
         timings.upload = t0.elapsed().saturating_sub(timings.accel);
@@ -473,14 +522,14 @@ impl Kernel {
                     1,
                 );
             }
-            let bytes = h as u64 * width as u64 * 16;
+            let bytes = h as u64 * width as u64 * px_bytes;
             enc.copy_buffer_to_buffer(&output, 0, &staging, 0, bytes);
             scoped(device, "trace", || queue.submit([enc.finish()]))?;
             wait(device, "trace")?;
             timings.trace += t1.elapsed();
 
             let t2 = Instant::now();
-            let data: Vec<[f32; 4]> = read_back(device, &staging, bytes)?;
+            let data: Vec<T> = read_back(device, &staging, bytes)?;
             timings.readback += t2.elapsed();
             band(y, &data);
             y += h;

@@ -205,6 +205,24 @@ pub fn render_gpu(gpu: &Gpu, buf: &SceneBuffers, spec: Specialisation) -> Image 
         .0
 }
 
+/// `kernel`'s lean frame (`render_rgba8`) of `buf`: one packed pixel each, row-major.
+pub fn render_gpu_rgba8(
+    gpu: &Gpu,
+    kernel: &glint::gpu::Kernel,
+    buf: &SceneBuffers,
+    spec: Specialisation,
+) -> Vec<u32> {
+    let mut out = vec![0u32; buf.params.width as usize * buf.params.height as usize];
+    let w = buf.params.width as usize;
+    // Tiles of 37 rows: the bands land at their rows, whatever the tiling.
+    kernel
+        .render_bands_rgba8(&gpu.device, &gpu.queue, buf, spec, 37, &mut |y, px| {
+            out[y as usize * w..y as usize * w + px.len()].copy_from_slice(px);
+        })
+        .expect("GPU render (lean frame)");
+    out
+}
+
 /// The agreement GPU and CPU images must reach: on lavapipe every f32 bit of every pixel
 /// and every hit/miss; on other adapters (whose `dot`, `normalize` and fusing differ) at
 /// most 0.1% of pixels off by at most 1/255, and 0.01% hit/miss disagreements.
