@@ -310,7 +310,11 @@ pub(super) fn load(
                 });
             }
             let before = triangles.len();
-            triangles.extend(placed);
+            if triangles.is_empty() {
+                *triangles = placed; // moved, not copied (35 MB for the dragon)
+            } else {
+                triangles.extend(placed);
+            }
             return finish(v, line, &key, &triangles[before..], &fail, warnings);
         }
     }
@@ -523,7 +527,10 @@ fn finish(
     if added.is_empty() {
         return Err(fail("no triangles: the mesh is empty".into()));
     }
-    let degenerate = added.iter().filter(|t| is_degenerate(&t.vertices)).count();
+    let degenerate = {
+        use rayon::prelude::*;
+        added.par_iter().filter(|t| is_degenerate(&t.vertices)).count()
+    };
     if degenerate > 0 {
         warnings.push(format!(
             "{}:{line}: {key}: {degenerate} zero-area triangles (never hit)",
