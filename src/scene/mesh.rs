@@ -529,7 +529,10 @@ fn finish(
     }
     let degenerate = {
         use rayon::prelude::*;
-        added.par_iter().filter(|t| is_degenerate(&t.vertices)).count()
+        added
+            .par_iter()
+            .filter(|t| is_degenerate(&t.vertices))
+            .count()
     };
     if degenerate > 0 {
         warnings.push(format!(
