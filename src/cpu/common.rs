@@ -116,19 +116,9 @@ pub fn clamp01<R: Real>(x: R) -> R {
     }
 }
 
-/// WGSL `to_u8`: one channel to 8 bits, as the PNG holds it: clamped to [0, 1] (NaN gives
-/// 0), scaled by 255, rounded half up. The one definition of glint's quantisation: the
-/// PNG writer (`image.rs`) and `compare` use it too.
-#[inline]
-pub fn to_u8(x: f32) -> u8 {
-    (clamp01(x) * 255.0 + 0.5) as u8
-}
-
-/// WGSL `pack_rgba8`: a colour as four bytes, red in the lowest, alpha opaque.
-#[inline]
-pub fn pack_rgba8(c: [f32; 4]) -> u32 {
-    to_u8(c[0]) as u32 | (to_u8(c[1]) as u32) << 8 | (to_u8(c[2]) as u32) << 16 | 255 << 24
-}
+/// WGSL `to_u8` and `pack_rgba8`, in their place in the mirror: defined on the ground
+/// floor (`kernel::real`), since the image writer, below this floor, quantises with them.
+pub use crate::kernel::real::{pack_rgba8, to_u8};
 
 /// WGSL `in_interval`: whether t lies in (t_min, t_max); false for NaN.
 #[inline]

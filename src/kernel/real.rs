@@ -236,3 +236,25 @@ pub fn camera_basis<R: Real>(eye: V3<R>, look_at: V3<R>, up: V3<R>) -> [V3<R>; 3
     let up2 = right.cross(forward);
     [forward, right, up2]
 }
+
+/// WGSL `to_u8` (common.wgsl): one channel to 8 bits, as the PNG holds it: clamped to
+/// [0, 1] as `clamp01` does (NaN gives 0), scaled by 255, rounded half up. glint's one
+/// quantisation, kept on the ground floor so that the image writer (`image.rs`), `compare`
+/// and the mirror (`cpu::common` re-exports it in WGSL's order) share it.
+#[inline]
+pub fn to_u8(x: f32) -> u8 {
+    let c = if !(x > 0.0) {
+        0.0
+    } else if x > 1.0 {
+        1.0
+    } else {
+        x
+    };
+    (c * 255.0 + 0.5) as u8
+}
+
+/// WGSL `pack_rgba8`: a colour as four bytes, red in the lowest, alpha opaque.
+#[inline]
+pub fn pack_rgba8(c: [f32; 4]) -> u32 {
+    to_u8(c[0]) as u32 | (to_u8(c[1]) as u32) << 8 | (to_u8(c[2]) as u32) << 16 | 255 << 24
+}
