@@ -242,6 +242,8 @@ pub fn camera_basis<R: Real>(eye: V3<R>, look_at: V3<R>, up: V3<R>) -> [V3<R>; 3
 /// quantisation, kept on the ground floor so that the image writer (`image.rs`), `compare`
 /// and the mirror (`cpu::common` re-exports it in WGSL's order) share it.
 #[inline]
+// `!(x > 0.0)` is the point: a NaN takes the first branch, as in `clamp01`.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn to_u8(x: f32) -> u8 {
     let c = if !(x > 0.0) {
         0.0
