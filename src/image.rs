@@ -52,6 +52,11 @@ pub use crate::kernel::real::to_u8;
 
 /// The 8-bit RGB bytes of `[r, g, b, t]` pixels (`to_u8` of each channel), in parallel.
 fn rgb8(pixels: &[[f32; 4]]) -> Vec<u8> {
+    rgb_bytes(pixels, |p| [to_u8(p[0]), to_u8(p[1]), to_u8(p[2])])
+}
+
+/// Three bytes a pixel, `rgb` of each, written in parallel chunks into one buffer.
+fn rgb_bytes<P: Sync>(pixels: &[P], rgb: impl Fn(&P) -> [u8; 3] + Sync) -> Vec<u8> {
     use rayon::prelude::*;
     const CHUNK: usize = 4096;
     let mut bytes = vec![0u8; pixels.len() * 3];
@@ -60,7 +65,7 @@ fn rgb8(pixels: &[[f32; 4]]) -> Vec<u8> {
         .zip(pixels.par_chunks(CHUNK))
         .for_each(|(out, px)| {
             for (o, p) in out.chunks_exact_mut(3).zip(px) {
-                o.copy_from_slice(&[to_u8(p[0]), to_u8(p[1]), to_u8(p[2])]);
+                o.copy_from_slice(&rgb(p));
             }
         });
     bytes
@@ -177,13 +182,10 @@ impl PngStream {
     /// Appends whole rows of packed pixels (`pack_rgba8`: red in the lowest byte), top to
     /// bottom: the lean frame's readback, written as it came.
     pub fn write_rgba8_rows(&mut self, pixels: &[u32]) -> Result<(), ImageError> {
-        let bytes: Vec<u8> = pixels
-            .iter()
-            .flat_map(|p| {
-                let [r, g, b, _] = p.to_le_bytes();
-                [r, g, b]
-            })
-            .collect();
+        let bytes = rgb_bytes(pixels, |p| {
+            let [r, g, b, _] = p.to_le_bytes();
+            [r, g, b]
+        });
         self.write_bytes(&bytes, pixels.len())
     }
 

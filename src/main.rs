@@ -236,6 +236,23 @@ fn band_rows(w: u32, h: u32, mib: u64) -> u32 {
     rows.min(h.max(1))
 }
 
+/// A GPU render's band callback: each band of a `w`×`h` frame written by `write` (timed as
+/// "encode") until a write fails, whose error stays in `written`; the progress bar moved.
+fn on_band<'a, T>(
+    written: &'a mut Result<(), glint::image::ImageError>,
+    bar: &'a ProgressBar,
+    w: u32,
+    h: u32,
+    mut write: impl FnMut(&[T]) -> Result<(), glint::image::ImageError> + 'a,
+) -> impl FnMut(u32, &[T]) + 'a {
+    move |y, px| {
+        if written.is_ok() {
+            *written = glint::stages::time("encode", || write(px));
+        }
+        bar.show(y + (px.len() / w as usize) as u32, h);
+    }
+}
+
 /// Band sizes: the GPU's tiles are large (each dispatch and readback has a fixed cost,
 /// about 3.5 ms on lavapipe); the CPU's bands small, since a band is the render's largest
 /// buffer once the scene is built (the dragon's peak: 162 MiB with 64 MiB bands, which
@@ -456,13 +473,7 @@ fn run(cli: Cli) -> Result<()> {
                             &buf,
                             spec,
                             band,
-                            &mut |y, px| {
-                                if written.is_ok() {
-                                    written =
-                                        glint::stages::time("encode", || png.write_rgba8_rows(px));
-                                }
-                                bar.show(y + (px.len() / w as usize) as u32, h);
-                            },
+                            &mut on_band(&mut written, &bar, w, h, |px| png.write_rgba8_rows(px)),
                         ),
                         Sink::Exr(..) => kernel.render_bands(
                             &gpu.device,
@@ -470,12 +481,7 @@ fn run(cli: Cli) -> Result<()> {
                             &buf,
                             spec,
                             band,
-                            &mut |y, px| {
-                                if written.is_ok() {
-                                    written = glint::stages::time("encode", || sink.write_rows(px));
-                                }
-                                bar.show(y + (px.len() / w as usize) as u32, h);
-                            },
+                            &mut on_band(&mut written, &bar, w, h, |px| sink.write_rows(px)),
                         ),
                     };
                     match result {

@@ -44,6 +44,8 @@ enum Entry {
     Query,
 }
 
+/// Where `render` writes (`image` in the shader).
+const IMAGE_BINDING: u32 = 5;
 /// Where `render_rgba8` writes (`image_rgba8` in the shader).
 const RGBA8_BINDING: u32 = 14;
 
@@ -211,7 +213,7 @@ impl Kernel {
                 })
             };
             let with = |binding| [render.clone(), vec![storage_entry(binding, false)]].concat();
-            let render_layout = layout("render", &with(5));
+            let render_layout = layout("render", &with(IMAGE_BINDING));
             let rgba8_layout = layout("render_rgba8", &with(RGBA8_BINDING));
             let query_layout = layout("query", &query);
             let pl = |bgl: &wgpu::BindGroupLayout| {
@@ -439,7 +441,7 @@ impl Kernel {
         let (pipeline, compile) = self.pipeline(device, spec, entry)?;
         let (out_binding, layout) = match entry {
             Entry::RenderRgba8 => (RGBA8_BINDING, &self.rgba8_layout),
-            _ => (5, &self.render_layout),
+            _ => (IMAGE_BINDING, &self.render_layout),
         };
         let px_bytes = size_of::<T>() as u64;
         timings.compile = compile;
