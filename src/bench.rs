@@ -70,6 +70,8 @@ pub struct Report {
     pub device_start_ms: Option<f64>,
     /// CPU threads used by the CPU tracers.
     pub cpu_threads: usize,
+    /// The packet tracer's build that ran (`avx512`, `avx2` or `baseline`).
+    pub cpu_simd: String,
     /// Timed runs per configuration (after one warm-up).
     pub runs: usize,
     /// The rows.
@@ -235,6 +237,7 @@ pub fn run(
         adapter: gpu.map(|g| g.describe()).unwrap_or_else(|| "none".into()),
         device_start_ms: gpu.map(|g| ms(g.start_time)),
         cpu_threads: rayon::current_num_threads(),
+        cpu_simd: crate::cpu::packet::Simd::Best.name().into(),
         runs,
         rows,
     })
@@ -244,12 +247,13 @@ impl Report {
     /// The report as a markdown table.
     pub fn markdown(&self) -> String {
         let mut s = format!(
-            "Adapter: {}; device start {}; CPU tracers on {} threads; median of {} runs after a warm-up.\n\n",
+            "Adapter: {}; device start {}; CPU tracers on {} threads ({} build); median of {} runs after a warm-up.\n\n",
             self.adapter,
             self.device_start_ms
                 .map(|m| format!("{m:.0} ms"))
                 .unwrap_or_else(|| "n/a".into()),
             self.cpu_threads,
+            self.cpu_simd,
             self.runs
         );
         s += "| scene | tracer | triangles | primitives | BVH build ms | size | median ms (min–max) | Mrays/s | compile ms | upload ms | AS build ms | trace ms | readback ms | max err | RMS err | px ≥1/255 | hit/miss | = CPU f32 |\n";

@@ -451,7 +451,7 @@ fn run(cli: Cli) -> Result<()> {
             let what = match renderer.tracer() {
                 glint::Tracer::Cpu => {
                     cpu_bands(&mut sink, &mut frame, false)?;
-                    "cpu (f32)".to_string()
+                    format!("cpu (f32, {})", glint::cpu::packet::Simd::Best.name())
                 }
                 glint::Tracer::CpuF64 => {
                     cpu_bands(&mut sink, &mut frame, true)?;
@@ -518,7 +518,7 @@ fn run(cli: Cli) -> Result<()> {
                         {
                             eprintln!("note: {e}; so the CPU tracer renders this");
                             cpu_bands(&mut sink, &mut frame, false)?;
-                            "cpu (f32)".to_string()
+                            format!("cpu (f32, {})", glint::cpu::packet::Simd::Best.name())
                         }
                         Err(e) => return Err(e.into()),
                     }

@@ -3,8 +3,8 @@
 //! `render_f32_mirror` (one `trace_pixel` per pixel), on the seed scenes and random scenes
 //! both through the BVH and testing every primitive, on real meshes with each triangle
 //! algorithm, with and without shadows, and on image sizes that cut packets at the right
-//! and bottom edges; for both builds of the packet tracer (AVX2 where this CPU has it, and
-//! the baseline build a CPU without it runs).
+//! and bottom edges; for every build of the packet tracer this CPU can run (AVX-512, AVX2
+//! and the baseline build a CPU without either runs).
 
 mod common;
 
@@ -12,6 +12,7 @@ use std::path::Path;
 
 use common::{Rng, random_scene, seed_scene};
 use glint::buffers::{SceneBuffers, Specialisation};
+use glint::cpu::packet::Simd;
 use glint::image::Image;
 use glint::scene::{Scene, TriangleAlgorithm};
 
@@ -48,15 +49,16 @@ fn check(what: &str, buf: &SceneBuffers, spec: Specialisation) -> Result<usize, 
 }
 
 /// Both CPU f32 renders of `buf` as `spec` says (BVH or every primitive), compared.
-/// The packet tracer's two builds (AVX2 where the CPU has it, and the baseline) are both
-/// checked.
+/// Every build of the packet tracer is checked (AVX-512, AVX2 and the baseline, as far as
+/// the CPU has them).
 fn check_as(what: &str, buf: &SceneBuffers, spec: Specialisation) -> Result<usize, String> {
     let mirror = glint::cpu::render_f32_mirror(buf, spec);
-    let best = glint::cpu::render_f32(buf, spec);
-    let baseline = glint::cpu::render_f32_baseline(buf, spec);
-    for (build, packets) in [("best", &best), ("baseline", &baseline)] {
-        same_bits(packets, &mirror)
-            .map_err(|e| format!("{what} (BVH: {}, {build} build): {e}", spec.use_bvh))?;
+    for simd in Simd::ALL {
+        let packets = glint::cpu::render_f32_simd(buf, spec, simd);
+        same_bits(&packets, &mirror).map_err(|e| {
+            let build = simd.name();
+            format!("{what} (BVH: {}, {build} build): {e}", spec.use_bvh)
+        })?;
     }
     Ok(mirror.hit_count())
 }
@@ -66,7 +68,7 @@ fn seed_scenes_equal_the_mirror_with_and_without_the_bvh() {
     for name in common::SEED_SCENES {
         let scene = seed_scene(name);
         for algo in ALGOS {
-            // 37×23: neither side a multiple of the 4×2 packet.
+            // 37×23: neither side a multiple of the 4×4 packet.
             let buf = SceneBuffers::new(&scene, 37, 23, algo);
             for bvh in [true, false] {
                 let spec = Specialisation::for_scene(&buf).with_bvh(bvh);

@@ -127,9 +127,12 @@ fn gpu_equals_cpu_with_smooth_and_samples() {
                 let c = glint::cpu::render_f32(&buf, spec);
                 assert!(c.hit_count() > 1000, "{label}: blank");
                 check_agreement(&g, &c, lavapipe).unwrap_or_else(|e| panic!("{label}: {e}"));
-                let base = glint::cpu::render_f32_baseline(&buf, spec);
+                for simd in glint::cpu::packet::Simd::ALL {
+                    let build = glint::cpu::render_f32_simd(&buf, spec, simd);
+                    let name = simd.name();
+                    assert!(diff(&c, &build).bit_exact(), "{label}: packet vs {name}");
+                }
                 let mirror = glint::cpu::render_f32_mirror(&buf, spec);
-                assert!(diff(&c, &base).bit_exact(), "{label}: packet vs baseline");
                 assert!(diff(&c, &mirror).bit_exact(), "{label}: packet vs mirror");
             }
         }

@@ -134,8 +134,8 @@ pub fn render_f64_rows(
     rows_with(&g, y0, rows, &|_, _| {})
 }
 
-/// Renders in f32 as the shader does, specialised as the GPU would be, in packets of eight
-/// camera rays (`packet/`). The image is [`render_f32_mirror`]'s, bit for bit
+/// Renders in f32 as the shader does, specialised as the GPU would be, in packets of
+/// `packet::LANES` camera rays (`packet/`). The image is [`render_f32_mirror`]'s, bit for bit
 /// (`tests/packets.rs`).
 pub fn render_f32(buf: &SceneBuffers, spec: Specialisation) -> Image {
     render_f32_progress(buf, spec, &|_, _| {})
@@ -151,11 +151,11 @@ pub fn render_f32_progress(
     render_packets(&g, packet::Simd::Best, progress)
 }
 
-/// [`render_f32`] with the packet tracer built for the baseline instruction set (what a
-/// CPU without AVX2 runs), for tests on machines that have it.
-pub fn render_f32_baseline(buf: &SceneBuffers, spec: Specialisation) -> Image {
+/// [`render_f32`] with the packet tracer's build `simd` (the AVX2 or the baseline build on
+/// a CPU with AVX-512, say), for tests: every build gives the same image.
+pub fn render_f32_simd(buf: &SceneBuffers, spec: Specialisation, simd: packet::Simd) -> Image {
     let g = globals_f32(buf, spec);
-    render_packets(&g, packet::Simd::Baseline, &|_, _| {})
+    render_packets(&g, simd, &|_, _| {})
 }
 
 /// Renders with the f32 mirror of `trace.wgsl` itself, one `trace_pixel` per pixel: the

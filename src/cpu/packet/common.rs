@@ -7,18 +7,21 @@
 use crate::kernel::real::V3;
 
 /// Rays per packet.
-pub const LANES: usize = 8;
+pub const LANES: usize = 16;
 
-const _: () = assert!(LANES == 8, "mask_of gathers exactly eight flags");
+const _: () = assert!(
+    LANES.is_multiple_of(8) && LANES <= 16,
+    "mask_of gathers eight flags at a time into a u16"
+);
 
 /// Packet width in pixels (the packet is `PACKET_W` × `PACKET_H`).
 pub const PACKET_W: u32 = 4;
 
 /// Packet height in pixels.
-pub const PACKET_H: u32 = 2;
+pub const PACKET_H: u32 = 4;
 
 /// A bit per lane.
-pub type Mask = u8;
+pub type Mask = u16;
 
 /// Where the lanes' rays start: `rel(p, l)` is `p - origin` of lane l, per component, and
 /// `from(p, l)` is `origin - p`.
@@ -97,13 +100,18 @@ impl<O> Lanes<O> {
     }
 }
 
-/// The bits of eight flags, lane l in bit l. Branch-free: the flags as bytes (0 or 1)
-/// times 0x0102040810204080 puts byte l's bit in bit 56 + l, and no two partial products
-/// share a bit, so nothing carries.
+/// The bits of the lanes' flags, lane l in bit l. Branch-free, eight lanes at a time: the
+/// flags as bytes (0 or 1) times 0x0102040810204080 puts byte l's bit in bit 56 + l, and no
+/// two partial products share a bit, so nothing carries.
 #[inline(always)]
 pub(super) fn mask_of(flags: &[bool; LANES]) -> Mask {
-    let bytes: [u8; LANES] = flags.map(|f| f as u8);
-    (u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56) as Mask
+    let mut m: Mask = 0;
+    for (h, eight) in flags.chunks_exact(8).enumerate() {
+        let bytes: [u8; 8] = std::array::from_fn(|l| eight[l] as u8);
+        let bits = u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56;
+        m |= (bits as Mask) << (8 * h);
+    }
+    m
 }
 
 /// `a · b` of lane l, left to right as `V3::dot`.

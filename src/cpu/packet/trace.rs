@@ -114,7 +114,8 @@ pub(super) fn closest_hit_all_lanes(
         let mut bt: [f32; LANES] = std::array::from_fn(|l| best[l].t);
         let mut bp = [PRIM_NONE; LANES];
         for k in 0..g.buf.params.n_spheres {
-            let t = sphere_lanes(&g.buf.spheres[k as usize], r, mask, false, t_min, &bt);
+            // Culled: a sphere that every lane passes well clear of is not tested.
+            let t = sphere_lanes(&g.buf.spheres[k as usize], r, mask, true, t_min, &bt);
             for l in 0..LANES {
                 let nearer = t[l] < bt[l];
                 bt[l] = if nearer { t[l] } else { bt[l] };
