@@ -217,7 +217,16 @@ pub(super) fn load(
             return finish(v, line, &key, &triangles[before..], &fail, warnings);
         }
     }
-    let mut bytes = gunzip(&obj_path, raw).map_err(&fail)?;
+    // A gzipped OBJ for glint's own reader is parsed as it is inflated (`gunzip_parse`);
+    // where that does not apply (see there) it is gunzipped whole, then parsed.
+    let is_gz = obj_path.extension().is_some_and(|e| e == "gz");
+    let early = (m.material.is_some() && is_gz)
+        .then(|| gunzip_parse(&raw, normals, GUNZIP_PIECE))
+        .flatten();
+    let (mut bytes, mut early) = match early {
+        Some((bytes, parsed)) => (bytes, Some(parsed)),
+        None => (gunzip(&obj_path, raw).map_err(&fail)?, None),
+    };
     let t_check = std::time::Instant::now();
     // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
     // first line as an unknown keyword.
@@ -237,9 +246,11 @@ pub(super) fn load(
     // glint's own parallel reader when the scene names the material and the OBJ holds only
     // positions and faces (tobj otherwise).
     if let Some(name) = &m.material {
-        let t = std::time::Instant::now();
-        let parsed = super::obj::parse(text, normals).map_err(&fail)?;
-        crate::stages::record("OBJ parse", t.elapsed());
+        let parsed = match early.take() {
+            Some(parsed) => parsed,
+            None => crate::stages::time("OBJ parse", || super::obj::parse(text, normals)),
+        }
+        .map_err(&fail)?;
         if let Some(parsed) = parsed {
             drop(bytes); // the text is parsed: free it before the triangles are placed
             let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
@@ -628,6 +639,111 @@ fn gunzip(path: &Path, raw: Vec<u8>) -> Result<Vec<u8>, String> {
     Ok(raw)
 }
 
+/// What `obj::parse` returns.
+type ObjParse = Result<Option<Parsed>, String>;
+
+/// The bytes of text `gunzip_parse` inflates before it hands them to a parse.
+const GUNZIP_PIECE: usize = 2 << 20;
+
+/// Gunzips `raw` and parses the OBJ with glint's reader at once: pieces of about `piece`
+/// bytes of whole lines are parsed in parallel (`obj::parse_piece`) while the rest is
+/// inflated, then joined in file order (`obj::join_pieces`), which gives what `obj::parse`
+/// gives for the whole text. Returns the text's bytes and the parse, or `None` where this
+/// does not apply and the caller reads the file the ordinary way, which then reports
+/// whatever is wrong as it always has: the gzip trailer's size (ISIZE) is 0, above the
+/// input limit, or not the size inflated (a multi-member or damaged file); the inflate
+/// fails; a piece is not UTF-8; the text starts with a byte-order mark.
+/// Stages: "gunzip" is the time spent inflating, "OBJ parse" the wait after it.
+fn gunzip_parse(
+    raw: &[u8],
+    normals: Normals,
+    piece: usize,
+) -> Option<(Vec<u8>, ObjParse)> {
+    use std::io::Read;
+    use std::sync::Mutex;
+    let t0 = std::time::Instant::now();
+    let isize_bytes: [u8; 4] = raw.get(raw.len().checked_sub(4)?..)?.try_into().ok()?;
+    let size = u32::from_le_bytes(isize_bytes) as usize;
+    if size == 0 || size as u64 > super::max_input_bytes() {
+        return None;
+    }
+    let mut buf = vec![0u8; size];
+    let mut inflating = std::time::Duration::ZERO;
+    let mut ok = true;
+    let pieces: Mutex<Vec<(usize, Option<super::obj::Piece>)>> = Mutex::new(Vec::new());
+    rayon::scope(|s| {
+        let mut dec = flate2::read::GzDecoder::new(raw);
+        let mut rest: &mut [u8] = &mut buf[..];
+        // Bytes at the head of `rest` inflated but not yet handed out.
+        let mut filled = 0usize;
+        for index in 0.. {
+            let t = std::time::Instant::now();
+            let mut want = (filled + piece).min(rest.len());
+            let mut cut = None;
+            while cut.is_none() {
+                while filled < want {
+                    match dec.read(&mut rest[filled..want]) {
+                        Ok(0) => break,
+                        Ok(n) => filled += n,
+                        Err(_) => {
+                            ok = false;
+                            break;
+                        }
+                    }
+                }
+                if !ok {
+                    break;
+                }
+                if filled < want || filled == rest.len() {
+                    // The end of the stream, or of the buffer: all that is left.
+                    cut = Some(filled);
+                } else if let Some(nl) = rest[..filled].iter().rposition(|&b| b == b'\n') {
+                    cut = Some(nl + 1);
+                } else {
+                    want = (want + piece).min(rest.len()); // one long line: read on
+                }
+            }
+            let at_end = filled < want || filled == rest.len();
+            if at_end && ok {
+                // The stream must end where ISIZE said.
+                ok = filled == rest.len() && matches!(dec.read(&mut [0u8; 1]), Ok(0));
+            }
+            inflating += t.elapsed();
+            let Some(cut) = cut.filter(|_| ok) else { break };
+            let (head, tail) = std::mem::take(&mut rest).split_at_mut(cut);
+            rest = tail;
+            filled -= cut;
+            let head: &[u8] = head;
+            if index == 0 && head.starts_with(b"\xEF\xBB\xBF") {
+                ok = false;
+                break;
+            }
+            let pieces = &pieces;
+            s.spawn(move |_| {
+                let parsed = std::str::from_utf8(head)
+                    .ok()
+                    .map(|text| super::obj::parse_piece(text, normals));
+                if let Ok(mut p) = pieces.lock() {
+                    p.push((index, parsed));
+                }
+            });
+            if at_end {
+                break;
+            }
+        }
+    });
+    crate::stages::record("gunzip", inflating);
+    let mut pieces = pieces.into_inner().ok()?;
+    if !ok {
+        return None;
+    }
+    pieces.sort_by_key(|(index, _)| *index);
+    let pieces: Option<Vec<super::obj::Piece>> = pieces.into_iter().map(|(_, p)| p).collect();
+    let parsed = super::obj::join_pieces(pieces?, normals);
+    crate::stages::record("OBJ parse", t0.elapsed().saturating_sub(inflating));
+    Some((buf, parsed))
+}
+
 /// Records the gunzip stage when dropped (at every return of `gunzip`).
 struct Gunzip(std::time::Instant);
 
@@ -639,7 +755,108 @@ impl Drop for Gunzip {
 
 #[cfg(test)]
 mod tests {
-    use super::Transform;
+    use super::{Normals, Transform, gunzip_parse};
+    use crate::scene::obj;
+
+    fn gz(bytes: &[u8]) -> Vec<u8> {
+        use std::io::Write;
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        e.write_all(bytes).unwrap();
+        e.finish().unwrap()
+    }
+
+    /// `obj::parse`'s result (or error) as text, to compare whole results.
+    fn shown(r: &Result<Option<obj::Parsed>, String>) -> String {
+        format!("{r:?}")
+    }
+
+    /// An OBJ with comments, groups, polygons, negative indices, normals, CRLF line ends,
+    /// a long line and a short face.
+    fn sample() -> String {
+        let mut s = String::from("# a comment\r\no thing\r\n");
+        for k in 0..3000 {
+            s += &format!("v {k} 0.5 -1e-3\nv {k} 1 0\r\nv {k} 0 1\nvn 0 0 1\n");
+            s += &format!(
+                "f -3//1 -2//1 -1//1\ng g{k}\nf {} {} {} {}\n",
+                1,
+                2,
+                3,
+                3 * k + 3
+            );
+        }
+        s += &format!("# {}\nf 1 2\nf 1 2 3", "x".repeat(5000));
+        s
+    }
+
+    #[test]
+    fn parsing_while_inflating_gives_what_parsing_the_whole_text_gives() {
+        let text = sample();
+        let gzipped = gz(text.as_bytes());
+        for normals in [Normals::Skip, Normals::Read] {
+            let whole = obj::parse(&text, normals);
+            assert!(matches!(whole, Ok(Some(_))), "{}", shown(&whole));
+            for piece in [1, 7, 100, 4096, 1 << 20] {
+                let (bytes, parsed) = gunzip_parse(&gzipped, normals, piece).expect("streamed");
+                assert_eq!(bytes, text.as_bytes(), "piece {piece}");
+                assert_eq!(shown(&parsed), shown(&whole), "piece {piece}");
+            }
+        }
+        // The twin: the same two pieces joined in the wrong order give another result, and
+        // the comparison sees it.
+        let cut = text[..text.len() / 2].rfind('\n').unwrap() + 1;
+        let (a, b) = text.split_at(cut);
+        let piece = |t| obj::parse_piece(t, Normals::Skip);
+        let swapped = obj::join_pieces(vec![piece(b), piece(a)], Normals::Skip);
+        assert_ne!(shown(&swapped), shown(&obj::parse(&text, Normals::Skip)));
+    }
+
+    #[test]
+    fn errors_and_tobj_files_come_out_as_from_the_whole_text() {
+        let bad = sample() + "\nv 1 2\nf 1 2 3\n";
+        let needs_tobj = sample() + "\nusemtl red\nf 1 2 3\n";
+        for text in [bad, needs_tobj] {
+            let whole = obj::parse(&text, Normals::Skip);
+            assert!(!matches!(whole, Ok(Some(_))));
+            for piece in [1, 100, 1 << 20] {
+                let (_, parsed) = gunzip_parse(&gz(text.as_bytes()), Normals::Skip, piece).unwrap();
+                assert_eq!(shown(&parsed), shown(&whole), "piece {piece}");
+            }
+        }
+    }
+
+    #[test]
+    fn what_it_cannot_stream_is_left_to_the_ordinary_path() {
+        let text = sample();
+        let good = gz(text.as_bytes());
+        // A trailer that lies about the size, either way.
+        for delta in [1u32, u32::MAX] {
+            let mut lying = good.clone();
+            let n = lying.len();
+            let size = u32::from_le_bytes(lying[n - 4..].try_into().unwrap());
+            lying[n - 4..].copy_from_slice(&size.wrapping_add(delta).to_le_bytes());
+            assert!(
+                gunzip_parse(&lying, Normals::Skip, 100).is_none(),
+                "{delta}"
+            );
+        }
+        // Two members (the first's size alone in the last trailer), a damaged stream, a
+        // byte-order mark, bytes that are not UTF-8, an empty file, a short one.
+        let two = [gz(text.as_bytes()), gz(b"v 1 2 3\n")].concat();
+        let mut damaged = good.clone();
+        damaged[good.len() / 2] ^= 0x55;
+        let bom = gz(&[b"\xEF\xBB\xBF".as_slice(), text.as_bytes()].concat());
+        let latin1 = gz(&[text.as_bytes(), b"\n# caf\xE9\n"].concat());
+        for (what, raw) in [
+            ("two members", two),
+            ("damaged", damaged),
+            ("bom", bom),
+            ("latin-1", latin1),
+            ("empty", gz(b"")),
+            ("short", vec![0x1f, 0x8b]),
+        ] {
+            assert!(gunzip_parse(&raw, Normals::Skip, 100).is_none(), "{what}");
+        }
+    }
 
     /// The transform as it was written out by hand before glam: rows of Rz·Ry·Rx summed
     /// left to right. glam's must give the same f32 vertices, bit for bit.

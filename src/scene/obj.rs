@@ -97,6 +97,29 @@ fn parse_with(text: &str, strict: bool, normals: Normals) -> Result<Option<Parse
         .par_windows(2)
         .map(|w| parse_chunk(&text[w[0]..w[1]], strict, normals))
         .collect();
+    join(chunks, normals)
+}
+
+/// One piece of an OBJ's text, whole lines, parsed as [`parse`] parses it: pieces given to
+/// [`join_pieces`] in file order give what [`parse`] gives for their text joined, wherever
+/// the file was cut (at line ends). This lets a file be parsed as it arrives (a gunzip).
+pub struct Piece(Result<Option<Chunk>, (u32, String)>);
+
+/// Parses one piece of whole lines (its last line may lack its `\n` only at the file's end).
+pub fn parse_piece(text: &str, normals: Normals) -> Piece {
+    Piece(parse_chunk(text, true, normals))
+}
+
+/// [`parse`]'s result for the text of `pieces` (in file order) joined.
+pub fn join_pieces(pieces: Vec<Piece>, normals: Normals) -> Result<Option<Parsed>, String> {
+    join(pieces.into_iter().map(|p| p.0).collect(), normals)
+}
+
+/// The chunks of a text (whole lines each, in file order) joined into what [`parse`] gives.
+fn join(
+    chunks: Vec<Result<Option<Chunk>, (u32, String)>>,
+    normals: Normals,
+) -> Result<Option<Parsed>, String> {
     // Line and vertex offsets of each chunk; the first error in file order wins.
     let mut done = Vec::with_capacity(chunks.len());
     let (mut line0, mut v0, mut n0) = (0u32, 0usize, 0usize);
