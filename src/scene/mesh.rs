@@ -654,11 +654,7 @@ const GUNZIP_PIECE: usize = 2 << 20;
 /// input limit, or not the size inflated (a multi-member or damaged file); the inflate
 /// fails; a piece is not UTF-8; the text starts with a byte-order mark.
 /// Stages: "gunzip" is the time spent inflating, "OBJ parse" the wait after it.
-fn gunzip_parse(
-    raw: &[u8],
-    normals: Normals,
-    piece: usize,
-) -> Option<(Vec<u8>, ObjParse)> {
+fn gunzip_parse(raw: &[u8], normals: Normals, piece: usize) -> Option<(Vec<u8>, ObjParse)> {
     use std::io::Read;
     use std::sync::Mutex;
     let t0 = std::time::Instant::now();

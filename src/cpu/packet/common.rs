@@ -105,10 +105,11 @@ impl<O> Lanes<O> {
 /// two partial products share a bit, so nothing carries.
 #[inline(always)]
 pub(super) fn mask_of(flags: &[bool; LANES]) -> Mask {
+    let bytes: [u8; LANES] = flags.map(u8::from);
     let mut m: Mask = 0;
-    for (h, eight) in flags.chunks_exact(8).enumerate() {
-        let bytes: [u8; 8] = std::array::from_fn(|l| eight[l] as u8);
-        let bits = u64::from_le_bytes(bytes).wrapping_mul(0x0102_0408_1020_4080) >> 56;
+    for h in 0..LANES / 8 {
+        let eight: [u8; 8] = bytes[8 * h..8 * h + 8].try_into().expect("eight lanes");
+        let bits = u64::from_le_bytes(eight).wrapping_mul(0x0102_0408_1020_4080) >> 56;
         m |= (bits as Mask) << (8 * h);
     }
     m

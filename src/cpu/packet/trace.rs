@@ -111,7 +111,10 @@ pub(super) fn closest_hit_all_lanes(
 ) {
     if g.spec.has_spheres {
         // Each lane's nearest t and sphere so far, as arrays (misses keep t_max).
-        let mut bt: [f32; LANES] = std::array::from_fn(|l| best[l].t);
+        let mut bt = [0.0f32; LANES];
+        for l in 0..LANES {
+            bt[l] = best[l].t;
+        }
         let mut bp = [PRIM_NONE; LANES];
         for k in 0..g.buf.params.n_spheres {
             // Culled: a sphere that every lane passes well clear of is not tested.
@@ -236,6 +239,62 @@ pub(super) fn descend<O: Origins>(
     None
 }
 
+/// The lanes of `m` whose shadow ray (in `r`, shears `sh`) primitive `id` blocks: a hit in
+/// (t_min, `bound`) when `id` is not the lane's `skip`; `tri` is its triangle when it is
+/// one. Written out rather than through `prim_lanes` (that shared helper, inlined here,
+/// made shadow rays 1.8–2.2× slower on the peers 2-triangle scene), and a function
+/// forced inline rather than a closure: the closure it was had one body, compiled for the
+/// baseline instruction set (SSE2) and called from every build, 15 % of a shadowed
+/// 1M-triangle frame.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn blocking_lanes(
+    g: &Globals<f32>,
+    r: &Lanes<PerLane>,
+    sh: &ShearLanes,
+    skip: &[u32; LANES],
+    id: u32,
+    tri: Option<&Triangle>,
+    m: Mask,
+    t_min: f32,
+    bound: &[f32; LANES],
+) -> Mask {
+    let t_max = bound[0];
+    let mut out: Mask = 0;
+    if let Some(tri) = tri
+        && g.spec.has_triangles
+        && g.spec.triangle_algo == TRIANGLE_WATERTIGHT
+    {
+        let h = watertight_lanes(tri, r, sh, m, t_min, bound);
+        for l in 0..LANES {
+            out |= (((m >> l) & 1 != 0 && id != skip[l] && h.t[l] < t_max) as Mask) << l;
+        }
+        return out;
+    }
+    if (id & TRIANGLE_BIT) == 0 {
+        if g.spec.has_spheres {
+            let t = sphere_lanes(&g.buf.spheres[id as usize], r, m, true, t_min, bound);
+            for l in 0..LANES {
+                out |= (((m >> l) & 1 != 0 && id != skip[l] && t[l] < t_max) as Mask) << l;
+            }
+        }
+        return out;
+    }
+    let mut left = m;
+    while left != 0 {
+        let l = left.trailing_zeros() as usize;
+        left &= left - 1;
+        let ray = Ray {
+            origin: V3::new(r.origin.0[0][l], r.origin.0[1][l], r.origin.0[2][l]),
+            dir: V3::new(r.dir[0][l], r.dir[1][l], r.dir[2][l]),
+        };
+        if id != skip[l] && hit_prim(g, ray, sh.lane(l), id, t_min, t_max).0 < t_max {
+            out |= 1 << l;
+        }
+    }
+    out
+}
+
 /// `occluded(ray, 0, 1, skip)` for each lane in `mask`, the rays given by their origins
 /// `o` and directions `d` (structure of arrays): the lanes whose ray is blocked. Through
 /// the BVH each lane reaches exactly the leaves its own `occluded_bvh` would (its box
@@ -251,48 +310,9 @@ pub(super) fn occluded_lanes(
 ) -> Mask {
     let (t_min, t_max) = (0.0f32, finite_bound(1.0f32));
     let sh = shear_lanes(d, g.spec.triangle_algo == TRIANGLE_WATERTIGHT);
-    let ray = |l: usize| Ray {
-        origin: V3::new(o[0][l], o[1][l], o[2][l]),
-        dir: V3::new(d[0][l], d[1][l], d[2][l]),
-    };
     let r = Lanes::new(PerLane(o), d);
     let bound = [t_max; LANES];
     let mut blocked: Mask = 0;
-    // Tests primitive `id` (triangle `tri` when it is one) for the lanes in `m`; returns
-    // the lanes it blocks.
-    //
-    // Written out rather than through `prim_lanes`: that shared helper, inlined here three
-    // times, made shadow rays 1.8–2.2× slower on the peers 2-triangle scene (benches/ab.sh,
-    // ecddaff against 5c405e2), with the same image.
-    let watertight = g.spec.has_triangles && g.spec.triangle_algo == TRIANGLE_WATERTIGHT;
-    let test = |id: u32, tri: Option<&Triangle>, m: Mask| -> Mask {
-        let mut out: Mask = 0;
-        if let (Some(tri), true) = (tri, watertight) {
-            let h = watertight_lanes(tri, &r, &sh, m, t_min, &bound);
-            for l in 0..LANES {
-                out |= (((m >> l) & 1 != 0 && id != skip[l] && h.t[l] < t_max) as Mask) << l;
-            }
-            return out;
-        }
-        if (id & TRIANGLE_BIT) == 0 {
-            if g.spec.has_spheres {
-                let t = sphere_lanes(&g.buf.spheres[id as usize], &r, m, true, t_min, &bound);
-                for l in 0..LANES {
-                    out |= (((m >> l) & 1 != 0 && id != skip[l] && t[l] < t_max) as Mask) << l;
-                }
-            }
-            return out;
-        }
-        let mut left = m;
-        while left != 0 {
-            let l = left.trailing_zeros() as usize;
-            left &= left - 1;
-            if id != skip[l] && hit_prim(g, ray(l), sh.lane(l), id, t_min, t_max).0 < t_max {
-                out |= 1 << l;
-            }
-        }
-        out
-    };
     if !g.spec.use_bvh {
         // `occluded_all`: spheres, then triangles, each lane until it is blocked.
         let mut open = mask;
@@ -316,7 +336,9 @@ pub(super) fn occluded_lanes(
                 if open == 0 {
                     break;
                 }
-                open &= !test(k | TRIANGLE_BIT, Some(&g.buf.triangles[k as usize]), open);
+                let tri = Some(&g.buf.triangles[k as usize]);
+                open &=
+                    !blocking_lanes(g, &r, &sh, skip, k | TRIANGLE_BIT, tri, open, t_min, &bound);
             }
         }
         return mask & !open;
@@ -345,7 +367,8 @@ pub(super) fn occluded_lanes(
                 for k in node.first..node.first + count {
                     let id = g.buf.prim_ids[k as usize];
                     let tri = leaf_triangle(g, id, k);
-                    blocked |= test(id, tri, lanes & !blocked);
+                    let m = lanes & !blocked;
+                    blocked |= blocking_lanes(g, &r, &sh, skip, id, tri, m, t_min, &bound);
                     if lanes & !blocked == 0 {
                         break;
                     }
@@ -490,10 +513,13 @@ pub fn camera_rays(
         n[1][l] = d[1][l] / len;
         n[2][l] = d[2][l] / len;
     }
-    let rays = std::array::from_fn(|l| Ray {
+    let mut rays = [Ray {
         origin: c.eye,
-        dir: V3::new(n[0][l], n[1][l], n[2][l]),
-    });
+        dir: V3::new(0.0, 0.0, 0.0),
+    }; LANES];
+    for l in 0..LANES {
+        rays[l].dir = V3::new(n[0][l], n[1][l], n[2][l]);
+    }
     (rays, active)
 }
 
@@ -525,7 +551,11 @@ pub(super) fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; 
         }
     }
     let nn = (n * n) as f32;
-    std::array::from_fn(|l| [sum[l][0] / nn, sum[l][1] / nn, sum[l][2] / nn, t_near[l]])
+    let mut out = [[0.0f32; 4]; LANES];
+    for l in 0..LANES {
+        out[l] = [sum[l][0] / nn, sum[l][1] / nn, sum[l][2] / nn, t_near[l]];
+    }
+    out
 }
 
 /// `trace_sample` at the point (dx, dy) of each pixel of the block.
@@ -545,14 +575,16 @@ pub(super) fn sample_packet(
         lit |= ((hits[l].prim != PRIM_NONE) as Mask) << l;
     }
     let colors = shade_lanes(g, &rays, &found, lit & active);
-    std::array::from_fn(|l| {
-        let hit = &hits[l];
-        if hit.prim == PRIM_NONE {
-            let bg = g.buf.params.background;
-            return [bg[0], bg[1], bg[2], -1.0];
+    // Loops, not `array::from_fn`: that is a generic function of its own, compiled once
+    // for the baseline instruction set and called from every build.
+    let bg = g.buf.params.background;
+    let mut out = [[bg[0], bg[1], bg[2], -1.0]; LANES];
+    for l in 0..LANES {
+        if hits[l].prim != PRIM_NONE {
+            out[l] = [colors[0][l], colors[1][l], colors[2][l], hits[l].t];
         }
-        [colors[0][l], colors[1][l], colors[2][l], hit.t]
-    })
+    }
+    out
 }
 
 /// `shade` for the lanes in `mask`, which must all hit something: the same operations in
