@@ -88,24 +88,26 @@ fn packet_rows(
     let w = g.cam.width;
     let mut pixels = vec![[0.0f32; 4]; w as usize * rows as usize];
     let done = AtomicU32::new(0);
-    let band = packet::PACKET_H as usize * w as usize;
+    let (pw, ph) = (packet::PACKET_W as usize, packet::PACKET_H as usize);
+    let band = ph * w as usize;
+    let trace = packet::tracer(simd);
     pixels
         .par_chunks_mut(band)
         .enumerate()
         .for_each(|(b, out)| {
-            let j = y0 + b as u32 * packet::PACKET_H;
-            // The last band may have fewer rows than a packet.
-            let n = out.len() as u32 / w;
-            for i in (0..w).step_by(packet::PACKET_W as usize) {
-                let px = packet::trace_packet(g, i, j, simd);
-                for (l, c) in px.iter().enumerate() {
-                    let (x, y) = (i + l as u32 % packet::PACKET_W, l as u32 / packet::PACKET_W);
-                    if x < w && y < n {
-                        out[(y * w + x) as usize] = *c;
-                    }
+            let j = y0 + (b * ph) as u32;
+            // The last band may have fewer rows than a packet, the last packet of a row
+            // fewer columns.
+            let n = out.len() / w as usize;
+            for i in (0..w as usize).step_by(pw) {
+                let px = trace(g, i as u32, j);
+                let cols = pw.min(w as usize - i);
+                for (y, row) in px.chunks_exact(pw).take(n).enumerate() {
+                    let at = y * w as usize + i;
+                    out[at..at + cols].copy_from_slice(&row[..cols]);
                 }
             }
-            progress(done.fetch_add(n, Ordering::Relaxed) + n, rows);
+            progress(done.fetch_add(n as u32, Ordering::Relaxed) + n as u32, rows);
         });
     pixels
 }

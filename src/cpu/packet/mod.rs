@@ -87,17 +87,26 @@ fn has_avx512() -> bool {
 /// lane `dy * PACKET_W + dx` for pixel (i + dx, j + dy); pixels outside the image are
 /// left out. `simd` picks the build.
 pub fn trace_packet(g: &Globals<f32>, i: u32, j: u32, simd: Simd) -> [[f32; 4]; LANES] {
+    tracer(simd)(g, i, j)
+}
+
+/// A packet tracer: [`trace_packet`] of one build.
+pub type PacketFn = fn(&Globals<f32>, u32, u32) -> [[f32; 4]; LANES];
+
+/// [`trace_packet`]'s build `simd`, chosen once (the CPU's features are asked here, not at
+/// every packet).
+pub fn tracer(simd: Simd) -> PacketFn {
     #[cfg(not(target_arch = "x86_64"))]
     let _ = simd;
     #[cfg(target_arch = "x86_64")]
     match simd.name() {
         // SAFETY: `name` said the CPU has AVX-512 F, VL, BW and DQ.
-        "avx512" => return unsafe { trace_packet_avx512(g, i, j) },
+        "avx512" => return |g, i, j| unsafe { trace_packet_avx512(g, i, j) },
         // SAFETY: `name` said the CPU has AVX2.
-        "avx2" => return unsafe { trace_packet_avx2(g, i, j) },
+        "avx2" => return |g, i, j| unsafe { trace_packet_avx2(g, i, j) },
         _ => {}
     }
-    trace_packet_body(g, i, j)
+    trace_packet_body
 }
 
 /// `trace_packet` compiled for AVX2: a lane loop is two eight-wide vectors.
