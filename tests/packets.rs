@@ -201,3 +201,52 @@ fn a_one_bit_change_fails_the_comparison() {
     let err = same_bits(&packets, &mirror).expect_err("a flipped bit must fail");
     assert!(err.contains("1 pixels differ"), "{err}");
 }
+
+/// Hard cases for every triangle algorithm's lane loops: triangles that are degenerate
+/// (a repeated corner, collinear corners), a sliver, one edge-on to the camera (its plane
+/// holds the eye: every ray is parallel to it), a fan whose triangles share edges and a
+/// vertex, a tiny far triangle and a huge near one; with shadows (shadow rays from
+/// origins on those shared edges) and without.
+#[test]
+fn hard_triangles_equal_the_mirror_with_every_algorithm() {
+    let mut src = String::from(
+        "ambient = [0.1, 0.1, 0.1]\n[camera]\neye = [0.0, 0.0, 6.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+         up = [0.0, 1.0, 0.0]\nfov = 50.0\nwidth = 8\nheight = 8\n\
+         [[lights]]\nposition = [2.0, 3.0, 5.0]\ncolor = [1.0, 1.0, 1.0]\n\
+         [materials.m]\nmodel = \"phong\"\nka = [0.2, 0.2, 0.2]\nkd = [0.7, 0.5, 0.3]\n\
+         ks = [0.5, 0.5, 0.5]\nn = 20.0\n",
+    );
+    let mut tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| {
+        src += &format!("[[triangles]]\nvertices = [{a:?}, {b:?}, {c:?}]\nmaterial = \"m\"\n");
+    };
+    tri([0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [1.0, 1.0, 0.0]); // a repeated corner
+    tri([-2.0, -2.0, 0.0], [0.0, 0.0, 0.0], [2.0, 2.0, 0.0]); // collinear
+    tri([-2.0, 1.0, 0.5], [2.0, 1.0, 0.5], [0.0, 1.0 + 1e-6, 0.5]); // a sliver
+    tri([0.0, -3.0, 6.0], [0.0, 3.0, 0.0], [0.0, -3.0, 0.0]); // edge-on: its plane holds the eye
+    let fan_at = [-1.0f32, -0.5, 0.0];
+    for k in 0..6 {
+        let ang = |k: i32| (k as f32) * std::f32::consts::PI / 3.0;
+        let p = |k: i32| [fan_at[0] + ang(k).cos(), fan_at[1] + ang(k).sin(), 0.2];
+        tri([fan_at[0], fan_at[1], 0.2], p(k), p(k + 1));
+    }
+    tri(
+        [1.5, -1.5, -40.0],
+        [1.5001, -1.5, -40.0],
+        [1.5, -1.4999, -40.0],
+    ); // tiny and far
+    tri([-1e4, -1e4, 5.5], [1e4, -1e4, 5.5], [0.0, 1e4, -5.5]); // huge and near
+    for shadows in [false, true] {
+        let text = format!("shadows = {shadows}\n{src}");
+        let scene = Scene::parse(&text, Path::new("hard.toml")).unwrap();
+        for algo in ALGOS {
+            // Odd sizes: packets cut at both edges.
+            let buf = SceneBuffers::new(&scene, 53, 41, algo);
+            for bvh in [true, false] {
+                let spec = Specialisation::for_scene(&buf).with_bvh(bvh);
+                let hits = check_as(&format!("{algo:?} shadows={shadows}"), &buf, spec)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                assert!(hits > 100, "{algo:?}: only {hits} pixels hit");
+            }
+        }
+    }
+}

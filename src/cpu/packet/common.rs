@@ -28,6 +28,8 @@ pub type Mask = u16;
 pub(super) trait Origins {
     fn rel(&self, p: &[f32; 3], l: usize) -> [f32; 3];
     fn from(&self, p: &[f32; 3], l: usize) -> [f32; 3];
+    /// Lane l's origin.
+    fn at(&self, l: usize) -> [f32; 3];
 }
 
 /// One origin for every lane (camera rays): LLVM hoists `rel` out of the lane loops.
@@ -41,6 +43,10 @@ impl Origins for Shared {
     #[inline(always)]
     fn from(&self, p: &[f32; 3], _l: usize) -> [f32; 3] {
         [self.0.x - p[0], self.0.y - p[1], self.0.z - p[2]]
+    }
+    #[inline(always)]
+    fn at(&self, _l: usize) -> [f32; 3] {
+        [self.0.x, self.0.y, self.0.z]
     }
 }
 
@@ -63,6 +69,10 @@ impl Origins for PerLane {
             self.0[1][l] - p[1],
             self.0[2][l] - p[2],
         ]
+    }
+    #[inline(always)]
+    fn at(&self, l: usize) -> [f32; 3] {
+        [self.0[0][l], self.0[1][l], self.0[2][l]]
     }
 }
 

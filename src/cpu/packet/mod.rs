@@ -13,10 +13,10 @@
 //!
 //! This is not a mirror of a WGSL function: it is the mirror's faster twin, and it gives
 //! the same image bit for bit. Lane by lane it does the mirror's operations in the
-//! mirror's order: `camera_ray`, `make_shear`, `box_interval`, the watertight test and
-//! `shade` are written again as lane loops, op for op; everything else (the other
-//! triangle tests, spheres, `pow`) calls the mirror's own functions one lane at a time.
-//! Shadow rays go eight at a time as well, each lane from its own origin. Only the order
+//! mirror's order: `camera_ray`, `make_shear`, `box_interval`, the three triangle tests,
+//! `hit_sphere` and `shade` are written again as lane loops, op for op; the rest (a
+//! non-integer `pow`, smooth shading's `shading_at`) calls the mirror's own functions one
+//! lane at a time. Shadow rays go sixteen at a time as well, each lane from its own origin. Only the order
 //! in which BVH leaves are reached differs, and `closest_hit_bvh`'s result does not
 //! depend on that order: it is the hit with the smallest t and, of equal t, the lowest
 //! primitive id (what `closest_hit_all` keeps), because every box test is conservative

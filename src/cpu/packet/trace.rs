@@ -9,7 +9,7 @@ use super::common::{
 };
 use super::prims::{
     ShearLanes, leaf_triangle, prim_lanes, prim_material, prim_normal, shear_lanes, sphere_lanes,
-    watertight_lanes,
+    triangle_lanes,
 };
 use crate::buffers::{
     BOX_SLACK, BvhNode, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, TRIANGLE_BIT,
@@ -263,9 +263,8 @@ fn blocking_lanes(
     let mut out: Mask = 0;
     if let Some(tri) = tri
         && g.spec.has_triangles
-        && g.spec.triangle_algo == TRIANGLE_WATERTIGHT
     {
-        let h = watertight_lanes(tri, r, sh, m, t_min, bound);
+        let h = triangle_lanes(g, tri, r, sh, m, t_min, bound);
         for l in 0..LANES {
             out |= (((m >> l) & 1 != 0 && id != skip[l] && h.t[l] < t_max) as Mask) << l;
         }
