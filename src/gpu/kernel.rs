@@ -13,7 +13,8 @@ use super::{GpuError, SHADER_SOURCE};
 use crate::buffers::{HitOut, Params, RayIn, SceneBuffers, Specialisation};
 use crate::image::Image;
 
-/// `@workgroup_size` of `render` in x and y.
+/// The side of the square of pixels one workgroup of `render` covers (its 64 invocations
+/// laid out by WGSL `pixel_of`, eight at a time in 4×2 blocks).
 pub const RENDER_WORKGROUP: u32 = 8;
 /// `@workgroup_size` of `query` in x.
 pub const QUERY_WORKGROUP: u32 = 64;
