@@ -316,8 +316,8 @@ pub(super) fn occluded_lanes(
         // `occluded_all`: spheres, then triangles, each lane until it is blocked.
         let mut open = mask;
         if g.spec.has_spheres {
-            // Written out here, not through `test`: that closure is not inlined, and this
-            // loop is most of a scene of spheres' shadow rays.
+            // Spheres written out (not through `blocking_lanes`), with their own early
+            // exit: this loop is most of a scene of spheres' shadow rays.
             for k in 0..g.buf.params.n_spheres {
                 if open == 0 {
                     break;
