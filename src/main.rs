@@ -508,7 +508,7 @@ fn run(cli: Cli) -> Result<()> {
             let what = match renderer.tracer() {
                 glint::Tracer::Cpu => {
                     cpu_bands(&mut sink, &mut frame, false)?;
-                    format!("cpu (f32, {})", glint::cpu::packet::Simd::Best.name())
+                    glint::cpu::describe_f32()
                 }
                 glint::Tracer::CpuF64 => {
                     cpu_bands(&mut sink, &mut frame, true)?;
@@ -575,7 +575,7 @@ fn run(cli: Cli) -> Result<()> {
                         {
                             eprintln!("note: {e}; so the CPU tracer renders this");
                             cpu_bands(&mut sink, &mut frame, false)?;
-                            format!("cpu (f32, {})", glint::cpu::packet::Simd::Best.name())
+                            glint::cpu::describe_f32()
                         }
                         Err(e) => return Err(e.into()),
                     }

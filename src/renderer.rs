@@ -151,7 +151,7 @@ impl Renderer {
     /// One line: the tracer, and for the GPU the adapter and driver.
     pub fn describe(&self) -> String {
         match &self.tracer {
-            Tracer::Cpu => format!("cpu (f32, {})", crate::cpu::packet::Simd::Best.name()),
+            Tracer::Cpu => crate::cpu::describe_f32(),
             Tracer::CpuF64 => "cpu-f64".into(),
             Tracer::Gpu(g) => format!("gpu: {}", g.describe()),
             Tracer::GpuRq(g) => format!("gpu-rq: {}", g.describe()),

@@ -136,6 +136,12 @@ pub fn render_f64_rows(
     rows_with(&g, y0, rows, &|_, _| {})
 }
 
+/// What `glint render` and [`crate::Renderer::describe`] call the f32 CPU tracer: "cpu
+/// (f32, avx512)", with the packet build this CPU runs.
+pub fn describe_f32() -> String {
+    format!("cpu (f32, {})", packet::Simd::Best.name())
+}
+
 /// Renders in f32 as the shader does, specialised as the GPU would be, in packets of
 /// `packet::LANES` camera rays (`packet/`). The image is [`render_f32_mirror`]'s, bit for bit
 /// (`tests/packets.rs`).
