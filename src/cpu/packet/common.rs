@@ -30,6 +30,9 @@ pub(super) trait Origins {
     fn from(&self, p: &[f32; 3], l: usize) -> [f32; 3];
     /// Lane l's origin.
     fn at(&self, l: usize) -> [f32; 3];
+    /// The origins with their components reordered: component i of the result is
+    /// component `k[i]` of the original.
+    fn permuted(&self, k: [usize; 3]) -> Self;
 }
 
 /// One origin for every lane (camera rays): LLVM hoists `rel` out of the lane loops.
@@ -47,6 +50,11 @@ impl Origins for Shared {
     #[inline(always)]
     fn at(&self, _l: usize) -> [f32; 3] {
         [self.0.x, self.0.y, self.0.z]
+    }
+    #[inline(always)]
+    fn permuted(&self, k: [usize; 3]) -> Self {
+        let o = [self.0.x, self.0.y, self.0.z];
+        Shared(V3::new(o[k[0]], o[k[1]], o[k[2]]))
     }
 }
 
@@ -73,6 +81,10 @@ impl Origins for PerLane {
     #[inline(always)]
     fn at(&self, l: usize) -> [f32; 3] {
         [self.0[0][l], self.0[1][l], self.0[2][l]]
+    }
+    #[inline(always)]
+    fn permuted(&self, k: [usize; 3]) -> Self {
+        PerLane([self.0[k[0]], self.0[k[1]], self.0[k[2]]])
     }
 }
 
