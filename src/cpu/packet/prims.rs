@@ -17,6 +17,7 @@ use crate::buffers::{
 };
 use crate::cpu::common::{Globals, Hit, Ray, in_interval, sign_nonneg};
 use crate::cpu::prims::{Shear, edge_function, hit_prim};
+use crate::kernel::real::V3;
 
 /// The lanes' `Shear`s as structure of arrays.
 pub(super) struct ShearLanes {
@@ -142,106 +143,11 @@ pub(super) fn watertight_lanes<O: Origins>(
     t_min: f32,
     t_max: &[f32; LANES],
 ) -> TriLanes {
-    if let Some(k) = sh.uniform {
-        return watertight_uniform(tri, r, sh, k, mask, t_min, t_max);
-    }
-    let rel = |l: usize| {
-        (
-            r.origin.rel(&tri.a, l),
-            r.origin.rel(&tri.b, l),
-            r.origin.rel(&tri.c, l),
-        )
+    let Edges { mut e, z, zero } = match sh.uniform {
+        Some(k) => edges_uniform(tri, r, sh, k),
+        None => edges_general(tri, r, sh),
     };
-    let mut e = [[0.0f32; LANES]; 3];
-    let mut zero_flags = [false; LANES];
-    for l in 0..LANES {
-        let (a, b, c) = rel(l);
-        let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
-        e[0][l] = cx * by - cy * bx;
-        e[1][l] = ax * cy - ay * cx;
-        e[2][l] = bx * ay - by * ax;
-        zero_flags[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
-    }
-    let zero = mask_of(&zero_flags);
     let mut fix = zero & mask;
-    while fix != 0 {
-        let l = fix.trailing_zeros() as usize;
-        fix &= fix - 1;
-        let (a, b, c) = rel(l);
-        let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
-        e[0][l] = edge_function(cx, by, cy, bx);
-        e[1][l] = edge_function(ax, cy, ay, cx);
-        e[2][l] = edge_function(bx, ay, by, ax);
-    }
-    let mut out = TriLanes {
-        t: [INFINITY; LANES],
-        u: [0.0; LANES],
-        v: [0.0; LANES],
-    };
-    for l in 0..LANES {
-        let (u, v, w) = (e[0][l], e[1][l], e[2][l]);
-        let outside = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
-        let det = u + v + w;
-        #[allow(clippy::eq_op)]
-        let degenerate = det == 0.0 || det != det;
-        let kz = sh.kz[l];
-        let (a, b, c) = rel(l);
-        let az = sh.sz[l] * pick(&a, kz);
-        let bz = sh.sz[l] * pick(&b, kz);
-        let cz = sh.sz[l] * pick(&c, kz);
-        let t_scaled = u * az + v * bz + w * cz;
-        let inv_det = 1.0 / det;
-        let t = t_scaled * inv_det;
-        let hit = !outside && !degenerate && in_interval(t, t_min, t_max[l]);
-        out.t[l] = if hit { t } else { INFINITY };
-        out.u[l] = if hit { v * inv_det } else { 0.0 };
-        out.v[l] = if hit { w * inv_det } else { 0.0 };
-    }
-    out
-}
-
-/// [`watertight_lanes`] when every lane shares the axes `k` = (kx, ky, kz): the same
-/// operations on the same values, with the triangle's and the origins' components picked
-/// once for the packet instead of by selects in every lane (component kx of `tri.a -
-/// origin` is `tri.a[kx] - origin[kx]`). The origins are permuted whole before the lane
-/// loop: read by a run-time component index inside it, they kept the loop scalar, and
-/// this path was 1.1–1.3× slower than the selects (sessions 8 and 9). Permuted, whole
-/// renders at 3072×2304 took 0.64 of the time on umbrella (watertight), 0.90 on the dragon
-/// and peers 1M, 0.89 on peers 1M with shadows (interleaved, median of 5, user time; the
-/// same images).
-#[inline(always)]
-fn watertight_uniform<O: Origins>(
-    tri: &Triangle,
-    r: &Lanes<O>,
-    sh: &ShearLanes,
-    k: [u32; 3],
-    mask: Mask,
-    t_min: f32,
-    t_max: &[f32; LANES],
-) -> TriLanes {
-    let [kx, ky, kz] = k.map(|k| k as usize);
-    let pa = [tri.a[kx], tri.a[ky], tri.a[kz]];
-    let pb = [tri.b[kx], tri.b[ky], tri.b[kz]];
-    let pc = [tri.c[kx], tri.c[ky], tri.c[kz]];
-    let mut e = [[0.0f32; LANES]; 3];
-    // Each vertex's kz component relative to the lane's origin, for t.
-    let mut z = [[0.0f32; LANES]; 3];
-    let mut zero_flags = [false; LANES];
-    let po = r.origin.permuted([kx, ky, kz]);
-    for l in 0..LANES {
-        let (a, b, c) = (po.rel(&pa, l), po.rel(&pb, l), po.rel(&pc, l));
-        let (ax, ay) = (a[0] - sh.sx[l] * a[2], a[1] - sh.sy[l] * a[2]);
-        let (bx, by) = (b[0] - sh.sx[l] * b[2], b[1] - sh.sy[l] * b[2]);
-        let (cx, cy) = (c[0] - sh.sx[l] * c[2], c[1] - sh.sy[l] * c[2]);
-        e[0][l] = cx * by - cy * bx;
-        e[1][l] = ax * cy - ay * cx;
-        e[2][l] = bx * ay - by * ax;
-        zero_flags[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
-        z[0][l] = a[2];
-        z[1][l] = b[2];
-        z[2][l] = c[2];
-    }
-    let mut fix = mask_of(&zero_flags) & mask;
     while fix != 0 {
         let l = fix.trailing_zeros() as usize;
         fix &= fix - 1;
@@ -280,31 +186,87 @@ fn watertight_uniform<O: Origins>(
     out
 }
 
-/// `a × b` as `V3::cross` computes it.
-#[inline(always)]
-fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+/// The first half of [`watertight_lanes`], per lane: the three edge functions (before the
+/// exact fallback), each vertex's kz component relative to the origin (for t), and the
+/// lanes with an edge function of exactly 0.
+struct Edges {
+    e: [[f32; LANES]; 3],
+    z: [[f32; LANES]; 3],
+    zero: Mask,
 }
 
-/// `a · b` as `V3::dot` computes it (left to right).
+/// [`Edges`] with each lane's own axes, picked by selects.
 #[inline(always)]
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+fn edges_general<O: Origins>(tri: &Triangle, r: &Lanes<O>, sh: &ShearLanes) -> Edges {
+    let mut e = [[0.0f32; LANES]; 3];
+    let mut z = [[0.0f32; LANES]; 3];
+    let mut zero_flags = [false; LANES];
+    for l in 0..LANES {
+        let (a, b, c) = (
+            r.origin.rel(&tri.a, l),
+            r.origin.rel(&tri.b, l),
+            r.origin.rel(&tri.c, l),
+        );
+        let [ax, ay, bx, by, cx, cy] = sheared(&a, &b, &c, sh, l);
+        e[0][l] = cx * by - cy * bx;
+        e[1][l] = ax * cy - ay * cx;
+        e[2][l] = bx * ay - by * ax;
+        zero_flags[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
+        let kz = sh.kz[l];
+        z[0][l] = pick(&a, kz);
+        z[1][l] = pick(&b, kz);
+        z[2][l] = pick(&c, kz);
+    }
+    Edges {
+        e,
+        z,
+        zero: mask_of(&zero_flags),
+    }
 }
 
-/// `a - b` per component.
+/// [`Edges`] when every lane shares the axes `k` = (kx, ky, kz): the same operations on
+/// the same values, with the triangle's and the origins' components picked once for the
+/// packet instead of by selects in every lane (component kx of `tri.a - origin` is
+/// `tri.a[kx] - origin[kx]`). The origins are permuted whole before the lane loop: read by
+/// a run-time component index inside it, they kept the loop scalar, and this path was
+/// 1.1–1.3× slower than the selects (sessions 8 and 9). Permuted, whole renders at
+/// 3072×2304 took 0.64 of the time on umbrella (watertight), 0.90 on the dragon and peers
+/// 1M, 0.89 on peers 1M with shadows (interleaved, median of 5, user time; the same
+/// images).
 #[inline(always)]
-fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+fn edges_uniform<O: Origins>(tri: &Triangle, r: &Lanes<O>, sh: &ShearLanes, k: [u32; 3]) -> Edges {
+    let [kx, ky, kz] = k.map(|k| k as usize);
+    let pa = [tri.a[kx], tri.a[ky], tri.a[kz]];
+    let pb = [tri.b[kx], tri.b[ky], tri.b[kz]];
+    let pc = [tri.c[kx], tri.c[ky], tri.c[kz]];
+    let mut e = [[0.0f32; LANES]; 3];
+    let mut z = [[0.0f32; LANES]; 3];
+    let mut zero_flags = [false; LANES];
+    let po = r.origin.permuted([kx, ky, kz]);
+    for l in 0..LANES {
+        let (a, b, c) = (po.rel(&pa, l), po.rel(&pb, l), po.rel(&pc, l));
+        let (ax, ay) = (a[0] - sh.sx[l] * a[2], a[1] - sh.sy[l] * a[2]);
+        let (bx, by) = (b[0] - sh.sx[l] * b[2], b[1] - sh.sy[l] * b[2]);
+        let (cx, cy) = (c[0] - sh.sx[l] * c[2], c[1] - sh.sy[l] * c[2]);
+        e[0][l] = cx * by - cy * bx;
+        e[1][l] = ax * cy - ay * cx;
+        e[2][l] = bx * ay - by * ax;
+        zero_flags[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
+        z[0][l] = a[2];
+        z[1][l] = b[2];
+        z[2][l] = c[2];
+    }
+    Edges {
+        e,
+        z,
+        zero: mask_of(&zero_flags),
+    }
 }
 
 /// `hit_triangle_moller_trumbore` of one triangle for every lane, lane l against
-/// `t_max[l]`: the same operations in the same order, lane by lane, its early returns as
-/// selects (a lane that misses computes values it never uses).
+/// `t_max[l]`: the same operations in the same order (the mirror's own `V3` arithmetic),
+/// lane by lane, its early returns as selects (a lane that misses computes values it never
+/// uses).
 #[inline(always)]
 pub(super) fn moller_trumbore_lanes<O: Origins>(
     tri: &Triangle,
@@ -312,31 +274,32 @@ pub(super) fn moller_trumbore_lanes<O: Origins>(
     t_min: f32,
     t_max: &[f32; LANES],
 ) -> TriLanes {
-    let e1 = sub(tri.b, tri.a);
-    let e2 = sub(tri.c, tri.a);
+    let ta = V3::from_f32(tri.a);
+    let e1 = V3::from_f32(tri.b) - ta;
+    let e2 = V3::from_f32(tri.c) - ta;
     let mut out = TriLanes {
         t: [INFINITY; LANES],
         u: [0.0; LANES],
         v: [0.0; LANES],
     };
     for l in 0..LANES {
-        let d = [r.dir[0][l], r.dir[1][l], r.dir[2][l]];
-        let p = cross(d, e2);
-        let det = dot(e1, p);
+        let d = V3::new(r.dir[0][l], r.dir[1][l], r.dir[2][l]);
+        let p = d.cross(e2);
+        let det = e1.dot(p);
         #[allow(clippy::eq_op)]
         let degenerate = det == 0.0 || det != det;
         let inv_det = 1.0 / det;
-        let s = r.origin.from(&tri.a, l);
-        let su = dot(s, p);
+        let s = V3::from_f32(r.origin.from(&tri.a, l));
+        let su = s.dot(p);
         let u = su * inv_det;
         // The mirror's comparisons, as written there.
         #[allow(clippy::manual_range_contains)]
         let u_in = u >= 0.0 && u <= 1.0;
-        let q = cross(s, e1);
-        let sv = dot(d, q);
+        let q = s.cross(e1);
+        let sv = d.dot(q);
         let v = sv * inv_det;
         let v_in = v >= 0.0 && (su + sv) * inv_det <= 1.0;
-        let t = dot(e2, q) * inv_det;
+        let t = e2.dot(q) * inv_det;
         let hit = !degenerate && u_in && v_in && in_interval(t, t_min, t_max[l]);
         out.t[l] = if hit { t } else { INFINITY };
         out.u[l] = if hit { u } else { 0.0 };
@@ -346,8 +309,9 @@ pub(super) fn moller_trumbore_lanes<O: Origins>(
 }
 
 /// `hit_triangle_naive` of one triangle for every lane, lane l against `t_max[l]`: the
-/// same operations in the same order, lane by lane; what depends on the triangle alone
-/// (its plane, its sliver check) is computed once, and the early returns are selects.
+/// same operations in the same order (the mirror's own `V3` arithmetic), lane by lane;
+/// what depends on the triangle alone (its plane, its sliver check) is computed once, and
+/// the early returns are selects.
 #[inline(always)]
 pub(super) fn naive_lanes<O: Origins>(
     tri: &Triangle,
@@ -360,36 +324,33 @@ pub(super) fn naive_lanes<O: Origins>(
         u: [0.0; LANES],
         v: [0.0; LANES],
     };
-    let ta = tri.a;
-    let e_ab = sub(tri.b, ta);
-    let e_ac = sub(tri.c, ta);
-    let cr = cross(e_ac, e_ab);
-    let len2 = dot(cr, cr);
+    let ta = V3::from_f32(tri.a);
+    let e_ab = V3::from_f32(tri.b) - ta;
+    let e_ac = V3::from_f32(tri.c) - ta;
+    let cr = e_ac.cross(e_ab);
     // Negated so that a NaN is degenerate too, as in the mirror.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if !(len2 > 0.0) {
+    if !(cr.dot(cr) > 0.0) {
         return out; // degenerate: no plane
     }
-    let len = len2.sqrt();
-    let n = [cr[0] / len, cr[1] / len, cr[2] / len];
-    let d00 = dot(e_ab, e_ab);
-    let d01 = dot(e_ab, e_ac);
-    let d11 = dot(e_ac, e_ac);
+    let n = cr.normalize();
+    let d00 = e_ab.dot(e_ab);
+    let d01 = e_ab.dot(e_ac);
+    let d11 = e_ac.dot(e_ac);
     let denom = d00 * d11 - d01 * d01;
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(denom > d00 * d11 * NAIVE_MIN_SIN2) {
         return out; // a sliver (buffers::NAIVE_MIN_SIN2)
     }
-    let ta_n = dot(ta, n);
+    let ta_n = ta.dot(n);
     for l in 0..LANES {
-        let d = [r.dir[0][l], r.dir[1][l], r.dir[2][l]];
-        let o = r.origin.at(l);
-        let dn = dot(d, n);
-        let t = (ta_n - dot(o, n)) / dn;
-        let p = [o[0] + d[0] * t, o[1] + d[1] * t, o[2] + d[2] * t];
-        let e_ap = sub(p, ta);
-        let d20 = dot(e_ap, e_ab);
-        let d21 = dot(e_ap, e_ac);
+        let d = V3::new(r.dir[0][l], r.dir[1][l], r.dir[2][l]);
+        let o = V3::from_f32(r.origin.at(l));
+        let dn = d.dot(n);
+        let t = (ta_n - o.dot(n)) / dn;
+        let e_ap = (o + d * t) - ta;
+        let d20 = e_ap.dot(e_ab);
+        let d21 = e_ap.dot(e_ac);
         let u = (d11 * d20 - d01 * d21) / denom;
         let v = (d00 * d21 - d01 * d20) / denom;
         let hit =
