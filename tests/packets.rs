@@ -63,23 +63,28 @@ fn check_as(what: &str, buf: &SceneBuffers, spec: Specialisation) -> Result<usiz
     Ok(mirror.hit_count())
 }
 
+/// `scene` at `w`×`h` compared both ways (through the BVH and testing every primitive)
+/// with every triangle algorithm; each comparison must hit more than `min_hits` pixels.
+fn check_every_way(what: &str, scene: &Scene, w: u32, h: u32, min_hits: usize) {
+    for algo in ALGOS {
+        let buf = SceneBuffers::new(scene, w, h, algo);
+        for bvh in [true, false] {
+            let spec = Specialisation::for_scene(&buf).with_bvh(bvh);
+            let hits =
+                check_as(&format!("{what} {algo:?}"), &buf, spec).unwrap_or_else(|e| panic!("{e}"));
+            assert!(
+                hits > min_hits,
+                "{what} {algo:?}: only {hits} pixels hit, the test would prove little"
+            );
+        }
+    }
+}
+
 #[test]
 fn seed_scenes_equal_the_mirror_with_and_without_the_bvh() {
     for name in common::SEED_SCENES {
-        let scene = seed_scene(name);
-        for algo in ALGOS {
-            // 37×23: neither side a multiple of the 4×4 packet.
-            let buf = SceneBuffers::new(&scene, 37, 23, algo);
-            for bvh in [true, false] {
-                let spec = Specialisation::for_scene(&buf).with_bvh(bvh);
-                let hits = check_as(&format!("{name} {algo:?}"), &buf, spec)
-                    .unwrap_or_else(|e| panic!("{e}"));
-                assert!(
-                    hits > 0,
-                    "{name}: nothing was hit, the test would prove little"
-                );
-            }
-        }
+        // 37×23: neither side a multiple of the 4×4 packet.
+        check_every_way(name, &seed_scene(name), 37, 23, 0);
     }
 }
 
@@ -238,15 +243,7 @@ fn hard_triangles_equal_the_mirror_with_every_algorithm() {
     for shadows in [false, true] {
         let text = format!("shadows = {shadows}\n{src}");
         let scene = Scene::parse(&text, Path::new("hard.toml")).unwrap();
-        for algo in ALGOS {
-            // Odd sizes: packets cut at both edges.
-            let buf = SceneBuffers::new(&scene, 53, 41, algo);
-            for bvh in [true, false] {
-                let spec = Specialisation::for_scene(&buf).with_bvh(bvh);
-                let hits = check_as(&format!("{algo:?} shadows={shadows}"), &buf, spec)
-                    .unwrap_or_else(|e| panic!("{e}"));
-                assert!(hits > 100, "{algo:?}: only {hits} pixels hit");
-            }
-        }
+        // Odd sizes: packets cut at both edges.
+        check_every_way(&format!("shadows={shadows}"), &scene, 53, 41, 100);
     }
 }

@@ -8,10 +8,8 @@ gpu_sentinel!();
 
 use glint::cpu::real::V3;
 
+/// The probe's body, after `common::PROBE_BINDINGS`: invocation i reads input 2i and 2i + 1.
 const PROBE: &str = r#"
-@group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
-@group(0) @binding(1) var<storage, read_write> output: array<vec4<f32>>;
-
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
@@ -58,7 +56,8 @@ fn gpu_arithmetic_matches_rust_bit_for_bit() {
             0.0,
         ]);
     }
-    let out = common::run_probe(gpu, PROBE, &input, 4 * n);
+    let src = format!("{}{PROBE}", common::PROBE_BINDINGS);
+    let out = common::run_probe(gpu, &src, &input, 4 * n, n);
     let mut bad = 0;
     let mut first = None;
     for i in 0..n {
@@ -101,14 +100,12 @@ fn quantisation_source() -> String {
     for name in ["clamp01", "to_u8", "pack_rgba8"] {
         s += &cut(name);
     }
-    s + r#"
-@group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
-@group(0) @binding(1) var<storage, read_write> output: array<vec4<f32>>;
-
+    s + common::PROBE_BINDINGS
+        + r#"
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;
-    if i >= arrayLength(&input) / 2u { return; }
+    if i >= arrayLength(&input) { return; }
     let c = input[i];
     let p = pack_rgba8(c);
     output[i] = vec4<f32>(f32(to_u8(c.w)), f32(p & 0xFFu), f32((p >> 8u) & 0xFFFFu), f32(p >> 24u));
@@ -186,9 +183,7 @@ fn quantisation_mismatches(
             ]
         })
         .collect();
-    // `run_probe` dispatches one invocation per two input vec4s: padded to twice the length.
-    let padded = [input.clone(), vec![[0.0; 4]; input.len()]].concat();
-    let out = common::run_probe(gpu, src, &padded, input.len());
+    let out = common::run_probe(gpu, src, &input, input.len(), input.len());
     let mut bad = Vec::new();
     for (c, o) in input.iter().zip(&out) {
         let p = pack_rgba8(*c);

@@ -89,8 +89,22 @@ impl Rng {
     }
 }
 
-/// Runs a probe shader with `input` at binding 0 and `out_len` vec4s at binding 1.
-pub fn run_probe(gpu: &Gpu, src: &str, input: &[[f32; 4]], out_len: usize) -> Vec<[f32; 4]> {
+/// The bindings every probe shader declares: `input` (read) and `output`.
+pub const PROBE_BINDINGS: &str = "
+@group(0) @binding(0) var<storage, read> input: array<vec4<f32>>;
+@group(0) @binding(1) var<storage, read_write> output: array<vec4<f32>>;
+";
+
+/// Runs a probe shader (entry point `main`, `@workgroup_size(64)`, the bindings of
+/// [`PROBE_BINDINGS`]) with `input` at binding 0 and `out_len` vec4s at binding 1, on at
+/// least `invocations` invocations (the shader bounds-checks its own index).
+pub fn run_probe(
+    gpu: &Gpu,
+    src: &str,
+    input: &[[f32; 4]],
+    out_len: usize,
+    invocations: usize,
+) -> Vec<[f32; 4]> {
     let d = &gpu.device;
     let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: None,
@@ -141,7 +155,7 @@ pub fn run_probe(gpu: &Gpu, src: &str, input: &[[f32; 4]], out_len: usize) -> Ve
         let mut pass = enc.begin_compute_pass(&Default::default());
         pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &bg, &[]);
-        pass.dispatch_workgroups((input.len() as u32 / 2).div_ceil(64), 1, 1);
+        pass.dispatch_workgroups((invocations as u32).div_ceil(64), 1, 1);
     }
     enc.copy_buffer_to_buffer(&outb, 0, &staging, 0, size);
     gpu.queue.submit([enc.finish()]);
