@@ -3,6 +3,8 @@
 //! is caught, deleted and rebuilt with a warning, and the image is still the same;
 //! `--no-cache` neither reads nor writes.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -77,9 +79,7 @@ fn entries(dir: &Path) -> Vec<PathBuf> {
 
 #[test]
 fn cached_renders_are_the_same_image_and_damage_is_rebuilt() {
-    let dir = std::env::temp_dir().join(format!("glint-cache-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::Scratch::new("cache");
     std::fs::write(dir.join("ico.obj"), glint::oracle::icosphere_obj(3)).unwrap();
     std::fs::write(dir.join("scene.toml"), scene(0.0)).unwrap();
 

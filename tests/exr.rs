@@ -12,10 +12,8 @@ use glint::image::Image;
 
 const GLINT: &str = env!("CARGO_BIN_EXE_glint");
 
-fn dir() -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("glint-exr-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("exr-{name}"))
 }
 
 #[test]
@@ -29,7 +27,8 @@ fn exr_round_trips_every_bit() {
     );
     // Values a PNG could never hold: subnormal, above 1, negative zero.
     img.pixels[0] = [1e-40, 3.5, -0.0, 1e30];
-    let path = dir().join("round.exr");
+    let d = dir("round");
+    let path = d.join("round.exr");
     img.save(&path).unwrap();
     let back = Image::load(&path).unwrap();
     assert_eq!((back.width, back.height), (160, 120));
@@ -39,7 +38,7 @@ fn exr_round_trips_every_bit() {
 
 #[test]
 fn glint_diff_says_equal_or_how_two_renders_differ() {
-    let d = dir();
+    let d = dir("diff");
     let render = |name: &str, extra: &[&str]| {
         let out = d.join(name);
         let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/umbrella.toml");

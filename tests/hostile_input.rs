@@ -14,11 +14,8 @@ use glint::scene::Scene;
 
 const GLINT: &str = env!("CARGO_BIN_EXE_glint");
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("glint-hostile-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("hostile-{name}"))
 }
 
 const HEAD: &str = r#"[camera]
@@ -300,7 +297,7 @@ fn output_is_checked_before_work_and_written_through_links() {
     assert!(meta.file_type().is_symlink(), "the link was replaced");
     assert!(d.join("real/target.png").is_file());
     // No temporary file is left anywhere.
-    for dirp in [d.clone(), d.join("real")] {
+    for dirp in [d.to_path_buf(), d.join("real")] {
         for e in std::fs::read_dir(dirp).unwrap() {
             let n = e.unwrap().file_name().to_string_lossy().into_owned();
             assert!(!n.ends_with(".tmp"), "left behind: {n}");

@@ -69,8 +69,7 @@ fn frame_of_8192_squared_renders_in_tiles() {
 #[test]
 fn scenes_larger_than_the_gpu_fall_back_to_the_cpu_under_auto() {
     let Some(gpu) = common::gpu() else { return };
-    let d = std::env::temp_dir().join(format!("glint-toolarge-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
+    let d = common::Scratch::new("toolarge");
     let mut obj = String::new();
     for i in 0..30_000 {
         let (x, y) = ((i % 200) as f32 * 0.02 - 2.0, (i / 200) as f32 * 0.02 - 1.5);

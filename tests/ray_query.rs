@@ -118,8 +118,7 @@ fn scenes_render_and_agree_with_f64() {
         .iter()
         .map(|n| (n.to_string(), seed_scene(n)))
         .collect();
-    let dir = std::env::temp_dir().join(format!("glint-rq-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::Scratch::new("rq");
     for mesh in ["teapot_npm", "bunny_npm", "suzanne", "dragon_res4"] {
         let path = dir.join(format!("{mesh}.toml"));
         let obj =

@@ -1,6 +1,8 @@
 //! Bad scene input: each case gives an error naming the file, the line and the key, never
 //! a panic.
 
+mod common;
+
 use glint::scene::{Scene, SceneError};
 
 const GOOD: &str = r#"ambient = [0.2, 0.2, 0.2]
@@ -131,8 +133,7 @@ fn zero_area_triangle_is_a_warning() {
 fn missing_file_and_non_utf8() {
     let e = Scene::load("/nonexistent/scene.toml").unwrap_err();
     assert!(e.to_string().contains("/nonexistent/scene.toml"));
-    let dir = std::env::temp_dir().join(format!("glint-errors-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::Scratch::new("errors");
     let p = dir.join("latin1.toml");
     std::fs::write(&p, b"ambient = [0.2, 0.2, 0.2]\n# caf\xe9\n").unwrap();
     let e = Scene::load(&p).unwrap_err();

@@ -10,7 +10,7 @@ mod common;
 
 gpu_sentinel!();
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use common::{check_agreement, render_gpu, seed_scene};
 use glint::buffers::{SceneBuffers, Specialisation};
@@ -20,11 +20,8 @@ use glint::cpu::trace::{self, Camera, Globals, Hit};
 use glint::scene::{Scene, TriangleAlgorithm};
 
 /// A fresh folder for one test's files.
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("glint-smooth-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn temp_dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("smooth-{name}"))
 }
 
 /// Options of [`scene_text`].

@@ -8,6 +8,40 @@ use std::sync::OnceLock;
 use glint::gpu::Gpu;
 use wgpu::util::DeviceExt;
 
+/// A test's own folder under the system's temporary folder, `glint-<name>-<pid>`: empty
+/// when made, and removed with everything in it when dropped, also when the test fails
+/// (a panic unwinds through it), so test runs leave nothing behind.
+pub struct Scratch(std::path::PathBuf);
+
+impl Scratch {
+    /// Makes the folder, emptying what an earlier run of the same pid may have left.
+    pub fn new(name: &str) -> Scratch {
+        let d = std::env::temp_dir().join(format!("glint-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        Scratch(d)
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::path::Path> for Scratch {
+    fn as_ref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// The process's GPU. Panics (fails the test) when there is no adapter, unless
 /// `GLINT_SKIP_GPU=1`, in which case it says loudly that the test is skipped and returns None.
 pub fn gpu() -> Option<&'static Gpu> {
