@@ -247,9 +247,22 @@ fn hit_prim(ray: Ray, sh: Shear, id: u32, t_min: f32, t_max: f32) -> vec3<f32> {
     return vec3<f32>(INFINITY, 0.0, 0.0);
 }
 
+/// Whether primitive `id` (a hit's, never PRIM_NONE) is a triangle. Where the scene has
+/// one kind only, the answer is a constant, so the other kind's loads are not compiled:
+/// lavapipe 22.3 runs both sides of every `if`, each load a per-lane loop.
+fn is_triangle(id: u32) -> bool {
+    if !HAS_SPHERES {
+        return true;
+    }
+    if !HAS_TRIANGLES {
+        return false;
+    }
+    return (id & TRIANGLE_BIT) != 0u;
+}
+
 /// The unit geometric normal at hit point `p` (not yet facing the ray).
 fn prim_normal(hit: Hit, p: vec3<f32>) -> vec3<f32> {
-    if (hit.prim & TRIANGLE_BIT) != 0u {
+    if is_triangle(hit.prim) {
         let tri = triangles[hit.prim & ~TRIANGLE_BIT];
         return normalize(cross3(tri.b - tri.a, tri.c - tri.a));
     }
@@ -259,7 +272,7 @@ fn prim_normal(hit: Hit, p: vec3<f32>) -> vec3<f32> {
 
 /// The material index of the hit primitive.
 fn prim_material(hit: Hit) -> u32 {
-    if (hit.prim & TRIANGLE_BIT) != 0u {
+    if is_triangle(hit.prim) {
         return triangles[hit.prim & ~TRIANGLE_BIT].material;
     }
     return spheres[hit.prim].material;

@@ -333,9 +333,21 @@ pub fn hit_prim<R: Real>(
     (R::INFINITY, R::ZERO, R::ZERO)
 }
 
+/// WGSL `is_triangle`: whether primitive `id` (a hit's, never PRIM_NONE) is a triangle; a
+/// constant where the scene has one kind only (the shader then compiles one branch).
+pub fn is_triangle<R: Real>(g: &Globals<R>, id: u32) -> bool {
+    if !g.spec.has_spheres {
+        return true;
+    }
+    if !g.spec.has_triangles {
+        return false;
+    }
+    (id & TRIANGLE_BIT) != 0
+}
+
 /// WGSL `prim_normal`: the unit geometric normal at `p` (not yet facing the ray).
 pub fn prim_normal<R: Real>(g: &Globals<R>, hit: &Hit<R>, p: V3<R>) -> V3<R> {
-    if (hit.prim & TRIANGLE_BIT) != 0 {
+    if is_triangle(g, hit.prim) {
         let tri = &g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize];
         let (ta, tb, tc) = tri_vertices::<R>(tri);
         return (tb - ta).cross(tc - ta).normalize();
@@ -346,7 +358,7 @@ pub fn prim_normal<R: Real>(g: &Globals<R>, hit: &Hit<R>, p: V3<R>) -> V3<R> {
 
 /// WGSL `prim_material`: the material index of the hit primitive.
 pub fn prim_material<R: Real>(g: &Globals<R>, hit: &Hit<R>) -> u32 {
-    if (hit.prim & TRIANGLE_BIT) != 0 {
+    if is_triangle(g, hit.prim) {
         return g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize].material;
     }
     g.buf.spheres[hit.prim as usize].material
