@@ -3,7 +3,7 @@
 # times them interleaved in one run (A B A B ...), scene by scene and tracer by tracer, and
 # flags every row where B's median frame is more than 10 % slower than A's.
 #
-#     bash benches/ab.sh [A_REV] [B_REV|worktree]     # ROUNDS=5, SCENES="a.toml b.toml"
+#     bash benches/ab.sh [A_REV] [B_REV|worktree]     # ROUNDS=5, SCENES="a.toml b.toml", SIZE=1024x768
 #
 # Scenes: the seed scenes and their shadowed variants; the peers scenes (2, 100k and 1M
 # triangles + 10 spheres, with and without shadows) when bench-out/peers has them
@@ -24,6 +24,7 @@ cd "$(dirname "$0")/.."
 a_rev="${1:-HEAD~1}"
 b_rev="${2:-worktree}"
 rounds="${ROUNDS:-5}"
+size="${SIZE:-1024x768}"
 top="$PWD"
 out=bench-out/ab
 mkdir -p "$out"
@@ -69,7 +70,7 @@ fi
 
 frame_ms() { # binary scene backend -> the frame time in ms, or "fail"
     local line
-    line="$("$1" render "$2" -o "$out/frame.png" --size 1024x768 --backend "$3" 2>/dev/null)" || {
+    line="$("$1" render "$2" -o "$out/frame.png" --size "$size" --backend "$3" 2>/dev/null)" || {
         echo fail
         return
     }
@@ -83,7 +84,7 @@ frame_ms() { # binary scene backend -> the frame time in ms, or "fail"
 }
 whole() { # binary scene backend cache-dir -> "wall_ms peak_MiB", or "fail"
     GLINT_CACHE_DIR="$4" /usr/bin/time -o "$out/time.txt" -f '%e %M' \
-        "$1" render "$2" -o "$out/frame.png" --size 1024x768 --backend "$3" >/dev/null 2>&1 || {
+        "$1" render "$2" -o "$out/frame.png" --size "$size" --backend "$3" >/dev/null 2>&1 || {
         echo fail
         return
     }

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The seed scenes' bench on both lavapipes in one run: `glint bench` on the system's Vulkan
-# driver, then on Mesa >= 25's lavapipe (`.ci/lavapipe.sh`), then one side-by-side table of
+# The seed scenes' bench on both lavapipes in one run, with `benches/none.toml` (no
+# primitive: the no-traversal frame, camera + background + readback): `glint bench` on the
+# system's Vulkan driver, then on Mesa >= 25's lavapipe (`.ci/lavapipe.sh`), then one side-by-side table of
 # the GPU rows (each column headed by the driver the adapter reports) with the CPU tracers'
 # rows from the same run:
 #
@@ -15,10 +16,12 @@ runs="${RUNS:-5}"
 mkdir -p "$out"
 cargo build --release --locked -q
 export GLINT_ADAPTER="${GLINT_ADAPTER:-llvmpipe}"
-./target/release/glint bench --runs "$runs" --out "$out/system" --adapter "$GLINT_ADAPTER" >/dev/null
+scenes=(scenes/sphere.toml scenes/triangle.toml scenes/umbrella.toml scenes/bb8.toml
+    scenes/mitsubishi.toml benches/none.toml)
+./target/release/glint bench "${scenes[@]}" --runs "$runs" --out "$out/system" --adapter "$GLINT_ADAPTER" >/dev/null
 (
     eval "$(bash .ci/lavapipe.sh)"
-    ./target/release/glint bench --runs "$runs" --out "$out/mesa25" --adapter "$GLINT_ADAPTER" >/dev/null
+    ./target/release/glint bench "${scenes[@]}" --runs "$runs" --out "$out/mesa25" --adapter "$GLINT_ADAPTER" >/dev/null
 )
 python3 - "$out" <<'PY' | tee "$out/drivers.md"
 import json, sys

@@ -1,12 +1,18 @@
 #!/usr/bin/env bash
-# glint beside Mitsuba 3 on the peers' scene (../shared/peers), measured in one run:
-# for T in 2, 100k, 1M grid triangles (+ 10 spheres) at 1024x768, glint's bench (release,
-# median of 5) with and without shadows, then Mitsuba's llvm_ad_rgb `direct` (primary +
-# shadow ray), `aov` and `raycast` (median of 3). Needs the peers' venv (see their README):
+# glint beside Mitsuba 3 on the peers' scene (../shared/peers), interleaved in one run: for
+# T in 2, 100k, 1M grid triangles (+ 10 spheres) at 1024x768, ROUNDS rounds (default 3) of
+# glint's bench (release, CPU tracers, watertight, median of 5) with and without shadows,
+# then Mitsuba's llvm_ad_rgb `direct` (primary + shadow ray), `aov` and `raycast` (median
+# of 3). The machine's speed drifts by more than the gaps measured, so each round pairs
+# glint with Mitsuba minutes apart at most, and the table gives each round's ratio and
+# their median. GPU=1 adds one pass of glint's GPU rows at the end. Needs the peers' venv
+# (see their README):
 #   PEERS=../shared/peers VENV=~/peers/venv bash benches/peers.sh bench-out/peers
+# Output: OUT/peers.md (the side-by-side table), OUT/glint-rN/ and OUT/mitsuba-rN.jsonl.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-bench-out/peers}
+rounds=${ROUNDS:-3}
 peers=$(cd "${PEERS:-../shared/peers}" && pwd)
 . "${VENV:-$HOME/peers/venv}/bin/activate"
 mkdir -p "$out"
@@ -16,13 +22,43 @@ for t in 2 100000 1000000; do
   python3 benches/peer_scene.py --peers "$peers" --tris "$t" --spheres 10 --out "$out" >/dev/null
   scenes+=("$out/peers_$t.toml" "$out/peers_${t}_noshadow.toml")
 done
-echo "== glint $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg)"
-./target/release/glint bench "${scenes[@]}" --runs 5 --triangle watertight --out "$out/glint" 2>/dev/null
-: > "$out/mitsuba.jsonl"
-for t in 2 100000 1000000; do
-  echo "== mitsuba T=$t $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg)"
-  (cd "$peers" && python3 -u mitsuba_bench.py --spheres 10 --tris "$t" --width 1024 --height 768 \
-     --variant llvm_ad_rgb --integrator all --reps 3 --json) | grep '^{' | tee -a "$out/mitsuba.jsonl"
+for r in $(seq 1 "$rounds"); do
+  echo "== round $r: glint $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg)"
+  ./target/release/glint bench "${scenes[@]}" --runs 5 --triangle watertight --no-gpu \
+    --out "$out/glint-r$r" 2>/dev/null | grep cpu-f32
+  : > "$out/mitsuba-r$r.jsonl"
+  for t in 2 100000 1000000; do
+    echo "== round $r: mitsuba T=$t $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg)"
+    (cd "$peers" && python3 -u mitsuba_bench.py --spheres 10 --tris "$t" --width 1024 --height 768 \
+       --variant llvm_ad_rgb --integrator all --reps 3 --json) | grep '^{' >> "$out/mitsuba-r$r.jsonl"
+  done
 done
-python3 "$peers/summarize.py" "$out/mitsuba.jsonl" > "$out/mitsuba.md" || true
-cat "$out/mitsuba.md"
+if [ "${GPU:-0}" = 1 ]; then
+  ./target/release/glint bench "${scenes[@]}" --runs 5 --triangle watertight --out "$out/glint-gpu" 2>/dev/null
+fi
+python3 - "$out" "$rounds" <<'PY' | tee "$out/peers.md"
+import json, statistics, sys
+out, rounds = sys.argv[1], int(sys.argv[2])
+def median(xs):
+    return statistics.median(xs) if xs else float("nan")
+glint, mitsuba = {}, {}
+for r in range(1, rounds + 1):
+    for row in json.load(open(f"{out}/glint-r{r}/report.json"))["rows"]:
+        if row["tracer"] == "cpu-f32":
+            glint.setdefault(row["scene"], []).append(row["median_ms"])
+    for line in open(f"{out}/mitsuba-r{r}.jsonl"):
+        m = json.loads(line)
+        mitsuba.setdefault((m["tris"], m["integrator"]), []).append(1000 * m["median_s"])
+print(f"glint's CPU tracer (f32, watertight, median of 5) beside Mitsuba 3 llvm_ad_rgb (2 threads, "
+      f"median of 3), 1024×768, {rounds} interleaved rounds; ratio = glint / Mitsuba, per round.\n")
+print("| scene | Mitsuba mode | glint ms per round | Mitsuba ms per round | ratio per round | median ratio |")
+print("|---|---|---|---|---|---|")
+for t in (2, 100000, 1000000):
+    for shadows, mode in ((True, "direct"), (False, "aov")):
+        name = f"peers_{t}" + ("" if shadows else "_noshadow")
+        g, m = glint.get(name, []), mitsuba.get((t, mode), [])
+        ratios = [a / b for a, b in zip(g, m)]
+        fmt = lambda xs, f: ", ".join(f.format(x) for x in xs)
+        print(f"| {name} | {mode} | {fmt(g, '{:.1f}')} | {fmt(m, '{:.1f}')} | {fmt(ratios, '{:.2f}')} "
+              f"| **{median(ratios):.2f}** |")
+PY
