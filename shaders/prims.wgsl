@@ -1,8 +1,8 @@
 // glint's kernel, part 2 of 3: the primitives (after `common.wgsl`; see its header for
 // how the parts are joined and mirrored). Everything that knows what a sphere or a
 // triangle is lives here: the intersection tests, and the only switches on a primitive's
-// kind, `hit_prim`, `prim_normal`, `prim_material` and `shading_at` (vertex normals are a
-// triangle's). Mirror: `src/cpu/prims.rs`. A new primitive: its struct, binding and id
+// kind, `hit_prim`, `is_triangle` (for `prim_normal` and `prim_material`) and `shading_at`
+// (vertex normals are a triangle's). Mirror: `src/cpu/prims.rs`. A new primitive: its struct, binding and id
 // tag in `common.wgsl`, its test and a branch in each switch here, its loop in
 // `trace.wgsl`'s every-primitive search (`closest_hit_all`, `occluded_all`).
 

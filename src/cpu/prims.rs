@@ -1,6 +1,7 @@
 //! The CPU mirror of `shaders/prims.wgsl`: the primitives. The intersection tests, and
-//! the only switches on a primitive's kind: [`hit_prim`], [`prim_normal`],
-//! [`prim_material`] and [`shading_at`] (see [`super::common`] for the mirror's rules).
+//! the only switches on a primitive's kind: [`hit_prim`], [`is_triangle`] (for
+//! [`prim_normal`] and [`prim_material`]) and [`shading_at`] (see [`super::common`] for
+//! the mirror's rules).
 
 // The tests and the helpers they use are `#[inline]`: the packet tracer (another module)
 // calls them lane by lane, and when they moved here from trace.rs LLVM stopped inlining
