@@ -97,6 +97,24 @@ pub(super) struct TriLanes {
     pub(super) v: [f32; LANES],
 }
 
+impl TriLanes {
+    /// Every lane a miss: t = INFINITY, u = v = 0.
+    pub(super) const MISS: TriLanes = TriLanes {
+        t: [INFINITY; LANES],
+        u: [0.0; LANES],
+        v: [0.0; LANES],
+    };
+
+    /// Lane l's result: (t, u, v) where `hit`, else the miss (a select each, so the lane
+    /// loops that call it vectorise).
+    #[inline(always)]
+    fn keep(&mut self, l: usize, hit: bool, t: f32, u: f32, v: f32) {
+        self.t[l] = if hit { t } else { INFINITY };
+        self.u[l] = if hit { u } else { 0.0 };
+        self.v[l] = if hit { v } else { 0.0 };
+    }
+}
+
 /// `V3::get`: component k of (x, y, z), as selects so that a lane loop vectorises.
 #[inline(always)]
 pub(super) fn pick(v: &[f32; 3], k: u32) -> f32 {
@@ -161,11 +179,7 @@ pub(super) fn watertight_lanes<O: Origins>(
         e[1][l] = edge_function(ax, cy, ay, cx);
         e[2][l] = edge_function(bx, ay, by, ax);
     }
-    let mut out = TriLanes {
-        t: [INFINITY; LANES],
-        u: [0.0; LANES],
-        v: [0.0; LANES],
-    };
+    let mut out = TriLanes::MISS;
     for l in 0..LANES {
         let (u, v, w) = (e[0][l], e[1][l], e[2][l]);
         let outside = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
@@ -179,9 +193,7 @@ pub(super) fn watertight_lanes<O: Origins>(
         let inv_det = 1.0 / det;
         let t = t_scaled * inv_det;
         let hit = !outside && !degenerate && in_interval(t, t_min, t_max[l]);
-        out.t[l] = if hit { t } else { INFINITY };
-        out.u[l] = if hit { v * inv_det } else { 0.0 };
-        out.v[l] = if hit { w * inv_det } else { 0.0 };
+        out.keep(l, hit, t, v * inv_det, w * inv_det);
     }
     out
 }
@@ -277,11 +289,7 @@ pub(super) fn moller_trumbore_lanes<O: Origins>(
     let ta = V3::from_f32(tri.a);
     let e1 = V3::from_f32(tri.b) - ta;
     let e2 = V3::from_f32(tri.c) - ta;
-    let mut out = TriLanes {
-        t: [INFINITY; LANES],
-        u: [0.0; LANES],
-        v: [0.0; LANES],
-    };
+    let mut out = TriLanes::MISS;
     for l in 0..LANES {
         let d = V3::new(r.dir[0][l], r.dir[1][l], r.dir[2][l]);
         let p = d.cross(e2);
@@ -301,9 +309,7 @@ pub(super) fn moller_trumbore_lanes<O: Origins>(
         let v_in = v >= 0.0 && (su + sv) * inv_det <= 1.0;
         let t = e2.dot(q) * inv_det;
         let hit = !degenerate && u_in && v_in && in_interval(t, t_min, t_max[l]);
-        out.t[l] = if hit { t } else { INFINITY };
-        out.u[l] = if hit { u } else { 0.0 };
-        out.v[l] = if hit { v } else { 0.0 };
+        out.keep(l, hit, t, u, v);
     }
     out
 }
@@ -319,11 +325,7 @@ pub(super) fn naive_lanes<O: Origins>(
     t_min: f32,
     t_max: &[f32; LANES],
 ) -> TriLanes {
-    let mut out = TriLanes {
-        t: [INFINITY; LANES],
-        u: [0.0; LANES],
-        v: [0.0; LANES],
-    };
+    let mut out = TriLanes::MISS;
     let ta = V3::from_f32(tri.a);
     let e_ab = V3::from_f32(tri.b) - ta;
     let e_ac = V3::from_f32(tri.c) - ta;
@@ -355,9 +357,7 @@ pub(super) fn naive_lanes<O: Origins>(
         let v = (d00 * d21 - d01 * d20) / denom;
         let hit =
             dn != 0.0 && in_interval(t, t_min, t_max[l]) && u >= 0.0 && v >= 0.0 && u + v <= 1.0;
-        out.t[l] = if hit { t } else { INFINITY };
-        out.u[l] = if hit { u } else { 0.0 };
-        out.v[l] = if hit { v } else { 0.0 };
+        out.keep(l, hit, t, u, v);
     }
     out
 }
@@ -488,11 +488,7 @@ pub(super) fn prim_lanes<O: Origins>(
     if let Some(tri) = tri {
         return triangle_lanes(g, tri, r, sh, mask, t_min, t_max);
     }
-    let mut h = TriLanes {
-        t: [INFINITY; LANES],
-        u: [0.0; LANES],
-        v: [0.0; LANES],
-    };
+    let mut h = TriLanes::MISS;
     if (id & TRIANGLE_BIT) == 0 {
         if g.spec.has_spheres {
             h.t = sphere_lanes(&g.buf.spheres[id as usize], r, mask, false, t_min, t_max);
