@@ -247,3 +247,53 @@ fn hard_triangles_equal_the_mirror_with_every_algorithm() {
         check_every_way(&format!("shadows={shadows}"), &scene, 53, 41, 100);
     }
 }
+
+/// `render_f32_into` over an image that held something else: a stale frame of the same
+/// size (every pixel NaN, so a pixel left unwritten shows), a buffer of another size, and
+/// sizes that cut packets at the edges. Each result equals the mirror in every bit.
+#[test]
+fn rendering_into_a_used_image_equals_the_mirror() {
+    let scene = mesh_scene("suzanne", true);
+    for (w, h) in [(61, 45), (64, 48), (9, 7)] {
+        let buf = SceneBuffers::new(&scene, w, h, TriangleAlgorithm::Watertight);
+        let spec = Specialisation::for_scene(&buf);
+        let mirror = glint::cpu::render_f32_mirror(&buf, spec);
+        let mut stale = Image {
+            width: w,
+            height: h,
+            pixels: vec![[f32::NAN; 4]; (w * h) as usize],
+        };
+        glint::cpu::render_f32_into(&buf, spec, &mut stale);
+        same_bits(&stale, &mirror).unwrap_or_else(|e| panic!("{w}x{h}, stale frame: {e}"));
+        let mut other = Image {
+            width: 3,
+            height: 2,
+            pixels: vec![[f32::NAN; 4]; 6],
+        };
+        glint::cpu::render_f32_into(&buf, spec, &mut other);
+        same_bits(&other, &mirror).unwrap_or_else(|e| panic!("{w}x{h}, other size: {e}"));
+    }
+}
+
+/// The twin: a stale frame that was not drawn over fails that comparison, and so does one
+/// whose last pixel was left stale.
+#[test]
+fn a_stale_pixel_fails_the_comparison() {
+    let scene = mesh_scene("suzanne", true);
+    let buf = SceneBuffers::new(&scene, 61, 45, TriangleAlgorithm::Watertight);
+    let spec = Specialisation::for_scene(&buf);
+    let mirror = glint::cpu::render_f32_mirror(&buf, spec);
+    let stale = Image {
+        width: 61,
+        height: 45,
+        pixels: vec![[f32::NAN; 4]; 61 * 45],
+    };
+    assert!(same_bits(&stale, &mirror).is_err());
+    let mut drawn = stale;
+    glint::cpu::render_f32_into(&buf, spec, &mut drawn);
+    assert!(same_bits(&drawn, &mirror).is_ok());
+    let last = drawn.pixels.len() - 1;
+    drawn.pixels[last] = [f32::NAN; 4];
+    let err = same_bits(&drawn, &mirror).expect_err("a stale pixel must fail");
+    assert!(err.contains("1 pixels differ"), "{err}");
+}

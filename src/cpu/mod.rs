@@ -85,10 +85,25 @@ fn packet_rows(
     rows: u32,
     progress: &Progress<'_>,
 ) -> Vec<[f32; 4]> {
+    let mut pixels = vec![[0.0f32; 4]; g.cam.width as usize * rows as usize];
+    packet_rows_into(g, simd, y0, progress, &mut pixels);
+    pixels
+}
+
+/// [`packet_rows`] written over `pixels`, whose length (a whole number of rows) gives the
+/// rows. Every pixel is written, whatever `pixels` held.
+fn packet_rows_into(
+    g: &Globals<f32>,
+    simd: packet::Simd,
+    y0: u32,
+    progress: &Progress<'_>,
+    pixels: &mut [[f32; 4]],
+) {
     let w = g.cam.width;
-    let mut pixels = vec![[0.0f32; 4]; w as usize * rows as usize];
+    let rows = (pixels.len() / w as usize) as u32;
     let done = AtomicU32::new(0);
-    let (pw, ph) = (packet::PACKET_W as usize, packet::PACKET_H as usize);
+    const PW: usize = packet::PACKET_W as usize;
+    let (pw, ph) = (PW, packet::PACKET_H as usize);
     let band = ph * w as usize;
     let trace = packet::tracer(simd);
     pixels
@@ -102,6 +117,16 @@ fn packet_rows(
             for i in (0..w as usize).step_by(pw) {
                 let px = trace(g, i as u32, j);
                 let cols = pw.min(w as usize - i);
+                if n == ph && cols == pw {
+                    // A whole packet: copies of a length known here, moves rather than a
+                    // `memmove` call each (which were 5 % of a frame without primitives).
+                    for (y, row) in px.chunks_exact(PW).enumerate() {
+                        let at = y * w as usize + i;
+                        let dst: &mut [[f32; 4]; PW] = (&mut out[at..at + PW]).try_into().unwrap();
+                        *dst = row.try_into().unwrap();
+                    }
+                    continue;
+                }
                 for (y, row) in px.chunks_exact(pw).take(n).enumerate() {
                     let at = y * w as usize + i;
                     out[at..at + cols].copy_from_slice(&row[..cols]);
@@ -109,7 +134,6 @@ fn packet_rows(
             }
             progress(done.fetch_add(n as u32, Ordering::Relaxed) + n as u32, rows);
         });
-    pixels
 }
 
 /// Rows `y0 .. y0 + rows` of [`render_f32`]'s image (row-major): a band of a frame too large
@@ -147,6 +171,24 @@ pub fn describe_f32() -> String {
 /// (`tests/packets.rs`).
 pub fn render_f32(buf: &SceneBuffers, spec: Specialisation) -> Image {
     render_f32_progress(buf, spec, &|_, _| {})
+}
+
+/// [`render_f32`] written over `image`, whose pixel buffer is kept when it has the frame's
+/// size (else it is replaced): the same pixels, bit for bit, whatever `image` held. A
+/// sequence of frames (an animation, an interactive view, a benchmark's timed runs) then
+/// maps and zeroes its 16 bytes a pixel once, not every frame: for a frame without
+/// primitives at 1024×768 that was about a third of the frame's time on this project's
+/// dev box (docs/bench/ab.md).
+pub fn render_f32_into(buf: &SceneBuffers, spec: Specialisation, image: &mut Image) {
+    let g = globals_f32(buf, spec);
+    let (w, h) = (g.cam.width, g.cam.height);
+    let n = w as usize * h as usize;
+    if image.pixels.len() != n {
+        image.pixels = vec![[0.0f32; 4]; n];
+    }
+    image.width = w;
+    image.height = h;
+    packet_rows_into(&g, packet::Simd::Best, 0, &|_, _| {}, &mut image.pixels);
 }
 
 /// [`render_f32`], reporting rows done to `progress`.
