@@ -88,6 +88,34 @@ fn seed_scenes_equal_the_mirror_with_and_without_the_bvh() {
     }
 }
 
+/// `render_f32` itself, which sends scenes of more than `PACKET_BRUTE_FORCE_MAX`
+/// primitives through the BVH even where the shader (and so the mirror) tests every
+/// primitive: the seed scenes, with and without shadows, equal the mirror as the shader
+/// is specialised for them.
+#[test]
+fn the_packet_tracers_own_choice_of_search_equals_the_mirror() {
+    let mut through_bvh_only_in_packets = 0;
+    for name in common::SEED_SCENES {
+        for shadows in [false, true] {
+            let mut scene = seed_scene(name);
+            scene.shadows = shadows;
+            let buf = SceneBuffers::new(&scene, 37, 23, TriangleAlgorithm::Watertight);
+            let spec = Specialisation::for_scene(&buf);
+            let n = buf.spheres.len() + buf.triangles.len();
+            if !spec.use_bvh && n > glint::cpu::PACKET_BRUTE_FORCE_MAX {
+                through_bvh_only_in_packets += 1;
+            }
+            let mirror = glint::cpu::render_f32_mirror(&buf, spec);
+            same_bits(&glint::cpu::render_f32(&buf, spec), &mirror)
+                .unwrap_or_else(|e| panic!("{name} (shadows {shadows}): {e}"));
+        }
+    }
+    assert!(
+        through_bvh_only_in_packets >= 4,
+        "{through_bvh_only_in_packets}"
+    );
+}
+
 /// A scene of one of the small test meshes with two lights, shadows on or off.
 fn mesh_scene(mesh: &str, shadows: bool) -> Scene {
     mesh_scene_n(mesh, shadows, 20.0)

@@ -65,6 +65,25 @@ fn globals_f32(buf: &SceneBuffers, spec: Specialisation) -> Globals<'_, f32> {
     }
 }
 
+/// Scenes with more primitives than this go through the BVH in the packet tracer, even
+/// where the shader tests every primitive (`buffers::BRUTE_FORCE_MAX`, 16): sixteen rays
+/// share each node's test, so the tree pays off sooner than for the shader's one ray.
+/// Interleaved, 1024×768, packets through the BVH against every primitive: mitsubishi
+/// 0.47 of the time, umbrella 0.55, mitsubishi with shadows 0.70, the peers' 2 triangles
+/// and 10 spheres 0.81 (docs/bench/ab.md). On lavapipe 22.3 the same change made the
+/// shader 1.5× slower on those scenes, so the shader keeps its own threshold.
+pub const PACKET_BRUTE_FORCE_MAX: usize = 2;
+
+/// `globals_f32` for the packet tracer: `spec` with the BVH on where
+/// [`PACKET_BRUTE_FORCE_MAX`] says. The image is the same either way, bit for bit:
+/// `closest_hit_bvh` and `occluded_bvh` give `closest_hit_all`'s and `occluded_all`'s
+/// answers (tests/packets.rs renders both ways against the mirror).
+fn packet_globals(buf: &SceneBuffers, spec: Specialisation) -> Globals<'_, f32> {
+    let prims = buf.spheres.len() + buf.triangles.len();
+    let bvh = spec.use_bvh || (buf.params.n_nodes > 0 && prims > PACKET_BRUTE_FORCE_MAX);
+    globals_f32(buf, spec.with_bvh(bvh))
+}
+
 /// Renders in packets of `packet::LANES` camera rays (blocks of `PACKET_W` × `PACKET_H`
 /// pixels, bands of `PACKET_H` rows in parallel): the same image as [`render_with`].
 fn render_packets(g: &Globals<f32>, simd: packet::Simd, progress: &Progress<'_>) -> Image {
@@ -144,7 +163,7 @@ pub fn render_f32_rows(
     y0: u32,
     rows: u32,
 ) -> Vec<[f32; 4]> {
-    let g = globals_f32(buf, spec);
+    let g = packet_globals(buf, spec);
     packet_rows(&g, packet::Simd::Best, y0, rows, &|_, _| {})
 }
 
@@ -180,7 +199,7 @@ pub fn render_f32(buf: &SceneBuffers, spec: Specialisation) -> Image {
 /// primitives at 1024×768 that was about a third of the frame's time on this project's
 /// dev box (docs/bench/ab.md).
 pub fn render_f32_into(buf: &SceneBuffers, spec: Specialisation, image: &mut Image) {
-    let g = globals_f32(buf, spec);
+    let g = packet_globals(buf, spec);
     let (w, h) = (g.cam.width, g.cam.height);
     let n = w as usize * h as usize;
     if image.pixels.len() != n {
@@ -197,12 +216,14 @@ pub fn render_f32_progress(
     spec: Specialisation,
     progress: &Progress<'_>,
 ) -> Image {
-    let g = globals_f32(buf, spec);
+    let g = packet_globals(buf, spec);
     render_packets(&g, packet::Simd::Best, progress)
 }
 
 /// [`render_f32`] with the packet tracer's build `simd` (the AVX2 or the baseline build on
-/// a CPU with AVX-512, say), for tests: every build gives the same image.
+/// a CPU with AVX-512, say), for tests: every build gives the same image. `spec.use_bvh`
+/// is taken as given (not raised by [`PACKET_BRUTE_FORCE_MAX`]), so that tests reach the
+/// packet tracer's search over every primitive on scenes of any size.
 pub fn render_f32_simd(buf: &SceneBuffers, spec: Specialisation, simd: packet::Simd) -> Image {
     let g = globals_f32(buf, spec);
     render_packets(&g, simd, &|_, _| {})
