@@ -70,8 +70,9 @@ fn globals_f32(buf: &SceneBuffers, spec: Specialisation) -> Globals<'_, f32> {
 /// share each node's test, so the tree pays off sooner than for the shader's one ray.
 /// Interleaved, 1024×768, packets through the BVH against every primitive: mitsubishi
 /// 0.47 of the time, umbrella 0.55, mitsubishi with shadows 0.70, the peers' 2 triangles
-/// and 10 spheres 0.81 (docs/bench/ab.md). On lavapipe 22.3 the same change made the
-/// shader 1.5× slower on those scenes, so the shader keeps its own threshold.
+/// and 10 spheres 0.81 (docs/bench/ab.md). The same change made the shader 1.5× slower
+/// on those scenes on lavapipe 22.3 and left it as it was on lavapipe 25 (0.95–1.0), so
+/// the shader keeps its own threshold.
 pub const PACKET_BRUTE_FORCE_MAX: usize = 2;
 
 /// `globals_f32` for the packet tracer: `spec` with the BVH on where
