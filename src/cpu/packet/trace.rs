@@ -434,6 +434,11 @@ pub fn closest_hit_packet(
     if mask == 0 {
         return out;
     }
+    // Each lane's nearest hit so far, as lane arrays (written to `best` at the end).
+    let mut bt = [t_max; LANES];
+    let mut bp = [PRIM_NONE; LANES];
+    let mut bu = [0.0f32; LANES];
+    let mut bv = [0.0f32; LANES];
     let mut stack = [(0u32, 0 as Mask); BVH_STACK];
     let mut sp = 0usize;
     let mut at = 0u32;
@@ -451,20 +456,29 @@ pub fn closest_hit_packet(
                 let id = g.buf.prim_ids[k as usize];
                 let tri = leaf_triangle(g, id, k);
                 let h = prim_lanes(g, |l| rays[l], &r, &sh, id, tri, mask, t_min, &bound);
-                let mut m = mask;
-                while m != 0 {
-                    let l = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    if nearer(h.t[l], id, &best[l]) {
-                        best[l] = Hit {
-                            t: h.t[l],
-                            prim: id,
-                            u: h.u[l],
-                            v: h.v[l],
-                        };
-                        bound[l] = tie_bound(&best[l]);
-                        slots[l] = k;
-                    }
+                // The merge as selects over lane arrays, every lane at once (a loop over
+                // the live lanes, through `best[l]`, was scalar code at every leaf).
+                for l in 0..LANES {
+                    let cur = Hit {
+                        t: bt[l],
+                        prim: bp[l],
+                        u: 0.0,
+                        v: 0.0,
+                    };
+                    let take = (mask >> l) & 1 != 0 && nearer(h.t[l], id, &cur);
+                    let new = Hit {
+                        t: h.t[l],
+                        prim: id,
+                        u: 0.0,
+                        v: 0.0,
+                    };
+                    let b = tie_bound(&new);
+                    bt[l] = if take { h.t[l] } else { bt[l] };
+                    bp[l] = if take { id } else { bp[l] };
+                    bu[l] = if take { h.u[l] } else { bu[l] };
+                    bv[l] = if take { h.v[l] } else { bv[l] };
+                    bound[l] = if take { b } else { bound[l] };
+                    slots[l] = if take { k } else { slots[l] };
                 }
             }
         }
@@ -473,6 +487,14 @@ pub fn closest_hit_packet(
         }
         sp -= 1;
         (at, mask) = stack[sp];
+    }
+    for l in 0..LANES {
+        best[l] = Hit {
+            t: bt[l],
+            prim: bp[l],
+            u: bu[l],
+            v: bv[l],
+        };
     }
     out
 }
