@@ -182,14 +182,21 @@ pub fn run(
                 kernel.clear_cache();
                 let compile = kernel.prepare(&gpu.device, sp)?;
                 let mut parts = Vec::new();
-                let mut img = None;
-                for r in 0..=runs {
-                    let (i, t) =
-                        kernel.render(&gpu.device, &gpu.queue, &buf, sp, &mut |_, _| {})?;
-                    if r > 0 {
-                        parts.push(t);
-                    }
-                    img = Some(i);
+                // Every run reads back into the warm-up's image, as the CPU rows draw
+                // into theirs: the frame, not the mapping of fresh memory.
+                let (i, _) = kernel.render(&gpu.device, &gpu.queue, &buf, sp, &mut |_, _| {})?;
+                let mut img = Some(i);
+                for _ in 0..runs {
+                    let image = img.as_mut().expect("rendered");
+                    let t = kernel.render_into(
+                        &gpu.device,
+                        &gpu.queue,
+                        &buf,
+                        sp,
+                        image,
+                        &mut |_, _| {},
+                    )?;
+                    parts.push(t);
                 }
                 let times: Vec<f64> = parts.iter().map(|t| ms(t.trace + t.readback)).collect();
                 let med = |f: &dyn Fn(&crate::gpu::GpuTimings) -> Duration| {

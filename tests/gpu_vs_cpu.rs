@@ -438,3 +438,61 @@ fn lean_agreement_fails_on_a_perturbed_frame() {
     two[k] -= 2;
     assert!(lean_agreement(&two, &want, false).is_err());
 }
+
+/// The same pixels, bit for bit, or where they first differ.
+fn same_pixels(a: &glint::image::Image, b: &glint::image::Image) -> Result<(), String> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err("sizes differ".into());
+    }
+    match (0..a.pixels.len())
+        .find(|&k| a.pixels[k].map(f32::to_bits) != b.pixels[k].map(f32::to_bits))
+    {
+        None => Ok(()),
+        Some(k) => Err(format!(
+            "pixel {k}: {:?} against {:?}",
+            a.pixels[k], b.pixels[k]
+        )),
+    }
+}
+
+/// `Kernel::render_into` (what the bench's timed runs call) over an image that held
+/// something else, NaN in every channel, of the same size or another: the fresh render's
+/// pixels, bit for bit; and its twin, the stale image before it is drawn over, fails.
+#[test]
+fn rendering_into_a_used_image_equals_a_fresh_render() {
+    let Some(gpu) = common::gpu() else { return };
+    let (buf, spec) = buffers(
+        &seed_scene("bb8-shadows"),
+        97,
+        61,
+        TriangleAlgorithm::Watertight,
+    );
+    let kernel = gpu.compute_kernel(spec).expect("kernel");
+    let (fresh, _) = kernel
+        .render(&gpu.device, &gpu.queue, &buf, spec, &mut |_, _| {})
+        .expect("render");
+    for (w, h) in [(97, 61), (3, 2)] {
+        let mut used = glint::image::Image {
+            width: w,
+            height: h,
+            pixels: vec![[f32::NAN; 4]; (w * h) as usize],
+        };
+        if (w, h) == (97, 61) {
+            assert!(
+                same_pixels(&used, &fresh).is_err(),
+                "the twin: a stale image must fail"
+            );
+        }
+        kernel
+            .render_into(
+                &gpu.device,
+                &gpu.queue,
+                &buf,
+                spec,
+                &mut used,
+                &mut |_, _| {},
+            )
+            .expect("render_into");
+        same_pixels(&used, &fresh).unwrap_or_else(|e| panic!("{w}x{h} before: {e}"));
+    }
+}

@@ -385,12 +385,35 @@ impl Kernel {
     ) -> Result<(Image, GpuTimings), GpuError> {
         let (width, height) = (buf.params.width, buf.params.height);
         let mut image = Image::new(width, height, [0.0; 4]);
-        let timings = self.render_bands(device, queue, buf, spec, u32::MAX, &mut |y, data| {
+        let timings = self.render_into(device, queue, buf, spec, &mut image, progress)?;
+        Ok((image, timings))
+    }
+
+    /// [`Kernel::render`] written over `image`, whose pixel buffer is kept when it has the
+    /// frame's size (else replaced): each tile is copied from the mapped readback buffer
+    /// straight into it. A sequence of frames (the bench's timed runs) then maps and zeroes
+    /// the frame's memory once, as the CPU's `render_f32_into` does.
+    pub fn render_into(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &SceneBuffers,
+        spec: Specialisation,
+        image: &mut Image,
+        progress: &mut dyn FnMut(u32, u32),
+    ) -> Result<GpuTimings, GpuError> {
+        let (width, height) = (buf.params.width, buf.params.height);
+        let n = width as usize * height as usize;
+        if image.pixels.len() != n {
+            image.pixels = vec![[0.0; 4]; n];
+        }
+        image.width = width;
+        image.height = height;
+        self.render_bands(device, queue, buf, spec, u32::MAX, &mut |y, data| {
             let start = y as usize * width as usize;
             image.pixels[start..start + data.len()].copy_from_slice(data);
             progress(y + (data.len() / width as usize) as u32, height);
-        })?;
-        Ok((image, timings))
+        })
     }
 
     /// [`Kernel::render`] without the whole frame: tiles of at most `max_rows` rows (and the
@@ -531,10 +554,11 @@ impl Kernel {
             wait(device, "trace")?;
             timings.trace += t1.elapsed();
 
+            // Readback: mapping the tile and `band`'s copy out of the mapped memory (no
+            // copy of its own in between).
             let t2 = Instant::now();
-            let data: Vec<T> = read_back(device, &staging, bytes)?;
+            read_back(device, &staging, bytes, &mut |data: &[T]| band(y, data))?;
             timings.readback += t2.elapsed();
-            band(y, &data);
             y += h;
         }
         Ok(timings)
@@ -597,18 +621,22 @@ impl Kernel {
             enc.copy_buffer_to_buffer(&hits, 0, &staging, 0, bytes);
             scoped(device, "query", || queue.submit([enc.finish()]))?;
             wait(device, "query")?;
-            out.extend(read_back::<HitOut>(device, &staging, bytes)?);
+            read_back(device, &staging, bytes, &mut |h: &[HitOut]| {
+                out.extend_from_slice(h)
+            })?;
         }
         Ok(out)
     }
 }
 
-/// Maps the first `bytes` of `staging` and copies them out as `T`s.
+/// Maps the first `bytes` of `staging` and hands them to `take` as `T`s, in the mapped
+/// memory itself.
 fn read_back<T: Pod>(
     device: &wgpu::Device,
     staging: &wgpu::Buffer,
     bytes: u64,
-) -> Result<Vec<T>, GpuError> {
+    take: &mut dyn FnMut(&[T]),
+) -> Result<(), GpuError> {
     let slice = staging.slice(..bytes);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {
@@ -630,13 +658,13 @@ fn read_back<T: Pod>(
             });
         }
     }
-    let data = {
+    {
         let view = slice.get_mapped_range().map_err(|e| GpuError::Runtime {
             during: "readback",
             message: e.to_string(),
         })?;
-        bytemuck::cast_slice::<u8, T>(&view).to_vec()
-    };
+        take(bytemuck::cast_slice::<u8, T>(&view));
+    }
     staging.unmap();
-    Ok(data)
+    Ok(())
 }
