@@ -19,6 +19,11 @@
 # run (a first render, its cache writes included), and "cached", where B's cache holds the
 # scene (primed once). A runs with the same folders; a build without the cache ignores them.
 # Output in bench-out/ab/whole.md.
+#
+# BENCH=1 compares `glint bench`'s own frames instead (timed runs into a kept image; CPU f32
+# and the GPU's specialised pipeline, trace + readback; BACKENDS=cpu adds --no-gpu,
+# TRIANGLE picks the algorithm, default watertight): each round A's bench, then B's. Output
+# in bench-out/ab/bench.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 a_rev="${1:-HEAD~1}"
@@ -91,6 +96,52 @@ whole() { # binary scene backend cache-dir -> "wall_ms peak_MiB", or "fail"
     awk '{printf "%.0f %.0f", $1 * 1000, $2 / 1024}' "$out/time.txt"
 }
 median() { tr ' ' '\n' | grep -v '^$' | sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+
+if [ -n "${BENCH:-}" ]; then
+    # `glint bench`'s own frames (timed runs into a kept image, CPU f32 and the GPU's
+    # specialised pipeline, trace + readback): each round runs A's bench on every scene,
+    # then B's; a row's figure is the median over rounds of the bench's medians.
+    nogpu=""
+    [[ " ${BACKENDS:-cpu gpu} " == *" gpu "* ]] || nogpu=--no-gpu
+    for r in $(seq "$rounds"); do
+        for x in A B; do
+            bin="$A"
+            [ "$x" = B ] && bin="$B"
+            rm -rf "$out/bench-$x-$r"
+            "$bin" bench "${scenes[@]}" --runs 5 --size "$size" --triangle "${TRIANGLE:-watertight}" \
+                $nogpu --out "$out/bench-$x-$r" >/dev/null 2>&1
+        done
+    done
+    for x in A B; do
+        for r in $(seq "$rounds"); do
+            awk -F'|' -v x="$x" '{
+                s = $2; t = $3; gsub(/ /, "", s); sub(/^ +/, "", t); split(t, w, " ")
+                if (w[1] != "cpu-f32" && w[1] != "gpu") next
+                split($8, m, " "); print s, w[1], x, m[1]
+            }' "$out/bench-$x-$r/report.md"
+        done
+    done >"$out/bench-rows.txt"
+    {
+        echo "A = $a_rev ($A), B = $b_rev ($B); glint bench, $rounds rounds, A B interleaved; $(nproc) cores; $(date -u +%FT%TZ)"
+        echo
+        echo "| scene | tracer | A median ms | B median ms | B / A | |"
+        echo "|---|---|---|---|---|---|"
+    } | tee "$out/bench.md"
+    flagged=0
+    while read -r s t; do
+        ma="$(awk -v s="$s" -v t="$t" '$1 == s && $2 == t && $3 == "A" {printf "%s ", $4}' "$out/bench-rows.txt" | median)"
+        mb="$(awk -v s="$s" -v t="$t" '$1 == s && $2 == t && $3 == "B" {printf "%s ", $4}' "$out/bench-rows.txt" | median)"
+        ratio="$(awk -v a="$ma" -v b="$mb" 'BEGIN {printf "%.3f", b / a}')"
+        flag=""
+        if awk -v r="$ratio" 'BEGIN {exit !(r > 1.10)}'; then
+            flag="**SLOWER > 10 %**"
+            flagged=1
+        fi
+        echo "| $s | $t | $ma | $mb | $ratio | $flag |" | tee -a "$out/bench.md"
+    done < <(awk '{print $1, $2}' "$out/bench-rows.txt" | awk '!seen[$0]++')
+    [ "$flagged" = 0 ] || exit 3
+    exit 0
+fi
 
 if [ -n "${WHOLE:-}" ]; then
     {
