@@ -31,8 +31,13 @@ pub struct GpuTimings {
     pub upload: Duration,
     /// The dispatches, until the GPU finished.
     pub trace: Duration,
-    /// Copying and mapping the output back.
+    /// Copying and mapping the output back (for `render` and `render_into`, the copy out
+    /// of the mapped memory into the image too).
     pub readback: Duration,
+    /// Time in the caller's band callback of `render_bands`/`render_bands_rgba8`, which
+    /// reads each tile from the mapped memory (an encoder's work, say): not readback.
+    /// Zero for `render` and `render_into`, whose callback is the copy into the image.
+    pub band: Duration,
     /// Building the driver's acceleration structures (the ray-query tracer only).
     pub accel: Duration,
 }
@@ -409,10 +414,15 @@ impl Kernel {
         }
         image.width = width;
         image.height = height;
-        self.render_bands(device, queue, buf, spec, u32::MAX, &mut |y, data| {
+        let t = self.render_bands(device, queue, buf, spec, u32::MAX, &mut |y, data| {
             let start = y as usize * width as usize;
             image.pixels[start..start + data.len()].copy_from_slice(data);
             progress(y + (data.len() / width as usize) as u32, height);
+        })?;
+        Ok(GpuTimings {
+            readback: t.readback + t.band,
+            band: Duration::ZERO,
+            ..t
         })
     }
 
@@ -554,11 +564,17 @@ impl Kernel {
             wait(device, "trace")?;
             timings.trace += t1.elapsed();
 
-            // Readback: mapping the tile and `band`'s copy out of the mapped memory (no
-            // copy of its own in between).
+            // The tile goes from the mapped memory straight to `band` (no copy of its own
+            // in between); the time `band` takes is counted apart.
             let t2 = Instant::now();
-            read_back(device, &staging, bytes, &mut |data: &[T]| band(y, data))?;
-            timings.readback += t2.elapsed();
+            let mut in_band = Duration::ZERO;
+            read_back(device, &staging, bytes, &mut |data: &[T]| {
+                let t3 = Instant::now();
+                band(y, data);
+                in_band += t3.elapsed();
+            })?;
+            timings.readback += t2.elapsed().saturating_sub(in_band);
+            timings.band += in_band;
             y += h;
         }
         Ok(timings)
