@@ -2,9 +2,10 @@
 // how the parts are joined and mirrored). Everything that knows what a sphere or a
 // triangle is lives here: the intersection tests, and the only switches on a primitive's
 // kind, `hit_prim`, `is_triangle` (for `prim_normal` and `prim_material`) and `shading_at`
-// (vertex normals are a triangle's). Mirror: `src/cpu/prims.rs`. A new primitive: its struct, binding and id
-// tag in `common.wgsl`, its test and a branch in each switch here, its loop in
-// `trace.wgsl`'s every-primitive search (`closest_hit_all`, `occluded_all`).
+// (vertex normals are a triangle's). Mirror: `src/cpu/prims.rs`. A new primitive: its
+// struct, binding and id tag in `common.wgsl`, its test and a branch in each switch
+// here, its loop in `trace.wgsl`'s every-primitive search (`closest_hit_all`,
+// `occluded_all`).
 
 // ---- spheres -----------------------------------------------------------------------------
 

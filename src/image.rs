@@ -81,6 +81,18 @@ impl Image {
         }
     }
 
+    /// Makes this a `width`×`height` image to be drawn over: the pixel buffer is kept when
+    /// it already holds that many pixels (their values are left as they were, for the
+    /// caller to overwrite), else replaced by a zeroed one.
+    pub fn reshape(&mut self, width: u32, height: u32) {
+        let n = width as usize * height as usize;
+        if self.pixels.len() != n {
+            self.pixels = vec![[0.0; 4]; n];
+        }
+        self.width = width;
+        self.height = height;
+    }
+
     /// The 8-bit RGB bytes, as written to the PNG.
     pub fn to_rgb8(&self) -> Vec<u8> {
         rgb8(&self.pixels)

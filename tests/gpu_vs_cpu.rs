@@ -439,22 +439,6 @@ fn lean_agreement_fails_on_a_perturbed_frame() {
     assert!(lean_agreement(&two, &want, false).is_err());
 }
 
-/// The same pixels, bit for bit, or where they first differ.
-fn same_pixels(a: &glint::image::Image, b: &glint::image::Image) -> Result<(), String> {
-    if (a.width, a.height) != (b.width, b.height) {
-        return Err("sizes differ".into());
-    }
-    match (0..a.pixels.len())
-        .find(|&k| a.pixels[k].map(f32::to_bits) != b.pixels[k].map(f32::to_bits))
-    {
-        None => Ok(()),
-        Some(k) => Err(format!(
-            "pixel {k}: {:?} against {:?}",
-            a.pixels[k], b.pixels[k]
-        )),
-    }
-}
-
 /// `Kernel::render_into` (what the bench's timed runs call) over an image that held
 /// something else, NaN in every channel, of the same size or another: the fresh render's
 /// pixels, bit for bit; and its twin, the stale image before it is drawn over, fails.
@@ -479,7 +463,7 @@ fn rendering_into_a_used_image_equals_a_fresh_render() {
         };
         if (w, h) == (97, 61) {
             assert!(
-                same_pixels(&used, &fresh).is_err(),
+                common::same_bits(&used, &fresh).is_err(),
                 "the twin: a stale image must fail"
             );
         }
@@ -493,6 +477,6 @@ fn rendering_into_a_used_image_equals_a_fresh_render() {
                 &mut |_, _| {},
             )
             .expect("render_into");
-        same_pixels(&used, &fresh).unwrap_or_else(|e| panic!("{w}x{h} before: {e}"));
+        common::same_bits(&used, &fresh).unwrap_or_else(|e| panic!("{w}x{h} before: {e}"));
     }
 }

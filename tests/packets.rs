@@ -10,7 +10,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{Rng, random_scene, seed_scene};
+use common::{Rng, random_scene, same_bits, seed_scene};
 use glint::buffers::{SceneBuffers, Specialisation};
 use glint::cpu::packet::Simd;
 use glint::image::Image;
@@ -21,27 +21,6 @@ const ALGOS: [TriangleAlgorithm; 3] = [
     TriangleAlgorithm::MollerTrumbore,
     TriangleAlgorithm::Watertight,
 ];
-
-/// Ok when the two images are equal in every bit; else where they first differ.
-fn same_bits(packets: &Image, mirror: &Image) -> Result<(), String> {
-    if (packets.width, packets.height) != (mirror.width, mirror.height) {
-        return Err("the images differ in size".into());
-    }
-    let differing: Vec<usize> = (0..mirror.pixels.len())
-        .filter(|&k| packets.pixels[k].map(f32::to_bits) != mirror.pixels[k].map(f32::to_bits))
-        .collect();
-    match differing.first() {
-        None => Ok(()),
-        Some(&k) => Err(format!(
-            "{} pixels differ; first ({}, {}): packets {:?}, mirror {:?}",
-            differing.len(),
-            k % mirror.width as usize,
-            k / mirror.width as usize,
-            packets.pixels[k],
-            mirror.pixels[k]
-        )),
-    }
-}
 
 /// Both CPU f32 renders of `buf` through the BVH, compared; Err names `what`.
 fn check(what: &str, buf: &SceneBuffers, spec: Specialisation) -> Result<usize, String> {

@@ -201,13 +201,7 @@ pub fn render_f32(buf: &SceneBuffers, spec: Specialisation) -> Image {
 /// dev box (docs/bench/ab.md).
 pub fn render_f32_into(buf: &SceneBuffers, spec: Specialisation, image: &mut Image) {
     let g = packet_globals(buf, spec);
-    let (w, h) = (g.cam.width, g.cam.height);
-    let n = w as usize * h as usize;
-    if image.pixels.len() != n {
-        image.pixels = vec![[0.0f32; 4]; n];
-    }
-    image.width = w;
-    image.height = h;
+    image.reshape(g.cam.width, g.cam.height);
     packet_rows_into(&g, packet::Simd::Best, 0, &|_, _| {}, &mut image.pixels);
 }
 

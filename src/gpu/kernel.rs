@@ -408,12 +408,7 @@ impl Kernel {
         progress: &mut dyn FnMut(u32, u32),
     ) -> Result<GpuTimings, GpuError> {
         let (width, height) = (buf.params.width, buf.params.height);
-        let n = width as usize * height as usize;
-        if image.pixels.len() != n {
-            image.pixels = vec![[0.0; 4]; n];
-        }
-        image.width = width;
-        image.height = height;
+        image.reshape(width, height);
         let t = self.render_bands(device, queue, buf, spec, u32::MAX, &mut |y, data| {
             let start = y as usize * width as usize;
             image.pixels[start..start + data.len()].copy_from_slice(data);

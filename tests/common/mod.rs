@@ -561,3 +561,24 @@ pub fn random_vertex_grid(rng: &mut Rng) -> String {
     let step = 2 + (rng.next_u64() % 3) as u32;
     vertex_grid_scene(eye, algo, 48, 36, step)
 }
+
+/// Ok when the two images are equal in every bit; else where they first differ.
+pub fn same_bits(a: &glint::image::Image, b: &glint::image::Image) -> Result<(), String> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err("the images differ in size".into());
+    }
+    let differing: Vec<usize> = (0..b.pixels.len())
+        .filter(|&k| a.pixels[k].map(f32::to_bits) != b.pixels[k].map(f32::to_bits))
+        .collect();
+    match differing.first() {
+        None => Ok(()),
+        Some(&k) => Err(format!(
+            "{} pixels differ; first ({}, {}): {:?} against {:?}",
+            differing.len(),
+            k % b.width as usize,
+            k / b.width as usize,
+            a.pixels[k],
+            b.pixels[k]
+        )),
+    }
+}
