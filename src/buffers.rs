@@ -30,10 +30,8 @@ pub struct SceneBuffers {
     /// names no entry); empty when no triangle is smooth, and then the pipeline's `SMOOTH`
     /// is off and the shader never reads it.
     pub normals: Vec<VertexNormals>,
-    /// For the CPU only: `triangles[prim_ids[k]]` at k (a zeroed triangle where a sphere
-    /// is), so that the packet tracer reads a leaf's triangles from consecutive memory.
-    /// Derived by [`SceneBuffers::assemble`]; the GPU never sees it.
-    pub leaf_triangles: Vec<Triangle>,
+    /// [`SceneBuffers::leaf_triangles`], made on its first call.
+    leaf_triangles: std::sync::OnceLock<Vec<Triangle>>,
     /// The triangle algorithm (`TRIANGLE_*`).
     pub triangle_algo: u32,
     /// Whether shadow rays are traced.
@@ -162,6 +160,28 @@ impl SceneBuffers {
         }
     }
 
+    /// For the CPU's packet tracer only: `triangles[prim_ids[k]]` at k (a zeroed triangle
+    /// where a sphere is), so that it reads a leaf's triangles from consecutive memory.
+    /// Made on the first call (its time counted in the "flatten" stage), so that a render
+    /// on the GPU, which never reads it, never holds this second copy of the triangles
+    /// (40 MB for the dragon).
+    pub fn leaf_triangles(&self) -> &[Triangle] {
+        self.leaf_triangles.get_or_init(|| {
+            crate::stages::time("flatten", || {
+                self.prim_ids
+                    .par_iter()
+                    .map(|&id| {
+                        if (id & TRIANGLE_BIT) != 0 {
+                            self.triangles[(id & !TRIANGLE_BIT) as usize]
+                        } else {
+                            Triangle::default()
+                        }
+                    })
+                    .collect()
+            })
+        })
+    }
+
     /// Puts buffers together from their parts and builds the BVH over the primitives;
     /// `params.n_spheres`, `n_triangles`, `n_lights` and `n_nodes` are set from the parts,
     /// `params.samples` is at least 1, and no triangle is smooth (`normals` is empty).
@@ -175,19 +195,6 @@ impl SceneBuffers {
         shadows: bool,
     ) -> Self {
         let bvh = cached_bvh(&spheres, &triangles);
-        let t_flat = std::time::Instant::now();
-        let leaf_triangles: Vec<Triangle> = bvh
-            .prim_ids
-            .par_iter()
-            .map(|&id| {
-                if (id & TRIANGLE_BIT) != 0 {
-                    triangles[(id & !TRIANGLE_BIT) as usize]
-                } else {
-                    Triangle::default()
-                }
-            })
-            .collect();
-        crate::stages::record("flatten", t_flat.elapsed());
         SceneBuffers {
             params: Params {
                 n_spheres: spheres.len() as u32,
@@ -204,7 +211,7 @@ impl SceneBuffers {
             nodes: bvh.nodes,
             prim_ids: bvh.prim_ids,
             normals: Vec::new(),
-            leaf_triangles,
+            leaf_triangles: std::sync::OnceLock::new(),
             triangle_algo: algo.code(),
             shadows,
         }

@@ -82,6 +82,11 @@ pub const PACKET_BRUTE_FORCE_MAX: usize = 2;
 fn packet_globals(buf: &SceneBuffers, spec: Specialisation) -> Globals<'_, f32> {
     let prims = buf.spheres.len() + buf.triangles.len();
     let bvh = spec.use_bvh || (buf.params.n_nodes > 0 && prims > PACKET_BRUTE_FORCE_MAX);
+    if bvh {
+        // Made here, once, on every thread (not by the first packet that asks, while the
+        // other threads wait).
+        buf.leaf_triangles();
+    }
     globals_f32(buf, spec.with_bvh(bvh))
 }
 
@@ -220,6 +225,9 @@ pub fn render_f32_progress(
 /// is taken as given (not raised by [`PACKET_BRUTE_FORCE_MAX`]), so that tests reach the
 /// packet tracer's search over every primitive on scenes of any size.
 pub fn render_f32_simd(buf: &SceneBuffers, spec: Specialisation, simd: packet::Simd) -> Image {
+    if spec.use_bvh {
+        buf.leaf_triangles(); // as in `packet_globals`
+    }
     let g = globals_f32(buf, spec);
     render_packets(&g, simd, &|_, _| {})
 }

@@ -547,7 +547,7 @@ pub(super) fn prim_normal<'a>(
 /// for a sphere.
 #[inline(always)]
 pub(super) fn leaf_triangle<'a>(g: &'a Globals<'a, f32>, id: u32, k: u32) -> Option<&'a Triangle> {
-    ((id & TRIANGLE_BIT) != 0).then(|| &g.buf.leaf_triangles[k as usize])
+    ((id & TRIANGLE_BIT) != 0).then(|| &g.buf.leaf_triangles()[k as usize])
 }
 
 #[cfg(test)]

@@ -87,7 +87,7 @@ pub(super) fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
         // A leaf's triangles are consecutive in `leaf_triangles`.
         let first = g
             .buf
-            .leaf_triangles
+            .leaf_triangles()
             .as_ptr()
             .wrapping_add(node.first as usize) as *const i8;
         for line in 0..(count as usize * size_of::<Triangle>()).div_ceil(64) {
@@ -631,7 +631,7 @@ pub(super) fn shade_lanes(
     let tri_of = |l: usize| -> &Triangle {
         let slot = found.slots[l];
         if slot != NO_SLOT {
-            return &g.buf.leaf_triangles[slot as usize];
+            return &g.buf.leaf_triangles()[slot as usize];
         }
         &g.buf.triangles[(hits[l].prim & !TRIANGLE_BIT) as usize]
     };
