@@ -186,19 +186,19 @@ impl Bvh {
     /// Primitives with NaN coordinates get a box without the NaN, or an empty one, which no
     /// ray enters; they never panic the build.
     pub fn build(spheres: &[Sphere], triangles: &[Triangle]) -> Bvh {
-        let mut refs: Vec<PrimRef> = Vec::with_capacity(spheres.len() + triangles.len());
-        refs.extend(
-            spheres
-                .iter()
-                .enumerate()
-                .map(|(k, s)| sphere_ref(s, k as u32)),
-        );
-        refs.extend(
-            triangles
-                .iter()
-                .enumerate()
-                .map(|(k, t)| triangle_ref(t, k as u32 | TRIANGLE_BIT)),
-        );
+        use rayon::prelude::*;
+        // On every thread (the dragon's 871k boxes took 11–13 ms on one), in id order.
+        let mut refs: Vec<PrimRef> = spheres
+            .par_iter()
+            .enumerate()
+            .map(|(k, s)| sphere_ref(s, k as u32))
+            .chain(
+                triangles
+                    .par_iter()
+                    .enumerate()
+                    .map(|(k, t)| triangle_ref(t, k as u32 | TRIANGLE_BIT)),
+            )
+            .collect();
         if refs.is_empty() {
             return Bvh::default();
         }
@@ -206,16 +206,15 @@ impl Bvh {
         let root = build_part(&mut refs, bounds, 0, 0);
         let mut bvh = Bvh {
             nodes: Vec::new(),
-            prim_ids: refs.iter().map(PrimRef::id).collect(),
+            prim_ids: refs.par_iter().map(PrimRef::id).collect(),
             depth: 0,
             largest_leaf: 0,
         };
         // The references are done with before the flat tree is written: not both at once.
         drop(refs);
-        // Reserved exactly: each part is freed as it is copied in, so the parts and the
-        // tree are never both whole in memory.
-        bvh.nodes.reserve_exact(root.nodes());
-        flatten(root, 0, &mut bvh);
+        // Zeroed pages (mapped, not written) that `flatten` fills.
+        bvh.nodes = vec![BvhNode::default(); root.nodes()];
+        (bvh.depth, bvh.largest_leaf) = flatten(root, 0, &mut bvh.nodes, 0);
         bvh
     }
 }
@@ -530,36 +529,43 @@ fn median_split(refs: &mut [PrimRef], centres: &Aabb) -> Plan {
     Plan::split_at(refs, axis, mid)
 }
 
-/// Appends `part` to `bvh.nodes` depth-first at `depth`.
-fn flatten(part: Part, depth: usize, bvh: &mut Bvh) {
+/// Writes `part` (its root at `depth`) depth-first into `out`, which holds exactly its
+/// nodes and starts at node `base` of the tree; returns the depth of its deepest leaf and
+/// its largest leaf. The two sides of a split are written on two threads, each part freed
+/// as it is copied in, so the parts and the tree are never both whole in memory.
+fn flatten(part: Part, depth: usize, out: &mut [BvhNode], base: u32) -> (usize, usize) {
     match part {
         Part::Flat {
             nodes,
             depth: deepest,
             largest_leaf,
         } => {
-            bvh.depth = bvh.depth.max(deepest).max(depth);
-            bvh.largest_leaf = bvh.largest_leaf.max(largest_leaf);
-            let base = bvh.nodes.len() as u32;
-            bvh.nodes.extend(nodes.into_iter().map(|mut node| {
+            for (o, mut node) in out.iter_mut().zip(nodes) {
                 if node.count_axis >> 2 == 0 {
                     node.first += base;
                 }
-                node
-            }));
+                *o = node;
+            }
+            (deepest.max(depth), largest_leaf)
         }
         Part::Split {
             bounds,
             axis,
             children,
         } => {
-            bvh.depth = bvh.depth.max(depth);
-            let at = bvh.nodes.len();
-            bvh.nodes.push(interior_node(&bounds, axis));
             let (l, r) = *children;
-            flatten(l, depth + 1, bvh);
-            bvh.nodes[at].first = bvh.nodes.len() as u32;
-            flatten(r, depth + 1, bvh);
+            let n_left = l.nodes();
+            let (root, rest) = out.split_first_mut().expect("a split has a node");
+            *root = BvhNode {
+                first: base + 1 + n_left as u32,
+                ..interior_node(&bounds, axis)
+            };
+            let (left, right) = rest.split_at_mut(n_left);
+            let ((dl, ll), (dr, lr)) = rayon::join(
+                || flatten(l, depth + 1, left, base + 1),
+                || flatten(r, depth + 1, right, base + 1 + n_left as u32),
+            );
+            (dl.max(dr), ll.max(lr))
         }
     }
 }
@@ -677,10 +683,11 @@ mod tests {
         let bounds = bounds_of(&refs);
         let root = build_part(&mut refs, bounds, 0, depth);
         let mut bvh = Bvh {
+            nodes: vec![BvhNode::default(); root.nodes()],
             prim_ids: refs.iter().map(PrimRef::id).collect(),
             ..Bvh::default()
         };
-        flatten(root, depth, &mut bvh);
+        (bvh.depth, bvh.largest_leaf) = flatten(root, depth, &mut bvh.nodes, 0);
         check(&bvh, tris.len());
         (bvh.depth, bvh.largest_leaf)
     }

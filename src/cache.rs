@@ -111,6 +111,53 @@ pub fn take_events() -> Vec<String> {
     std::mem::take(&mut *EVENTS.lock().unwrap_or_else(|e| e.into_inner()))
 }
 
+/// Whether [`store_owned`] writes on a thread of its own ([`write_behind`]).
+static WRITE_BEHIND: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// The threads writing entries for [`store_owned`], until [`finish_writes`] joins them.
+static PENDING: Mutex<Vec<std::thread::JoinHandle<()>>> = Mutex::new(Vec::new());
+
+/// Lets [`store_owned`] write its entries on threads of their own, so that the work after
+/// it (a mesh's entry is written while its BVH is built) does not wait for the write. A
+/// program that turns this on must call [`finish_writes`] before it exits (`glint render`
+/// does), or an entry may never be written; never half of one, as entries are renamed into
+/// place whole. Off by default, so a library caller's stores are done when they return.
+pub fn write_behind(on: bool) {
+    WRITE_BEHIND.store(on, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Waits until every entry that [`store_owned`] is writing is written (or has failed, as a
+/// warning among the events); returns how many it waited for.
+pub fn finish_writes() -> usize {
+    let pending = std::mem::take(&mut *PENDING.lock().unwrap_or_else(|e| e.into_inner()));
+    let n = pending.len();
+    for h in pending {
+        let _ = h.join();
+    }
+    n
+}
+
+/// [`store`] for sections the caller gives away: written on a thread of its own where
+/// [`write_behind`] is on, else here and now.
+pub fn store_owned(kind: &'static str, key: Key, sections: Vec<Vec<u32>>) {
+    let write = move || {
+        let parts: Vec<&[u32]> = sections.iter().map(Vec::as_slice).collect();
+        store(kind, &key, &parts);
+    };
+    if !WRITE_BEHIND.load(std::sync::atomic::Ordering::Relaxed) {
+        return write();
+    }
+    match std::thread::Builder::new()
+        .name(format!("cache {kind}"))
+        .spawn(write)
+    {
+        Ok(h) => PENDING.lock().unwrap_or_else(|e| e.into_inner()).push(h),
+        Err(e) => event(format!(
+            "warning: cannot start the {kind} cache writer: {e}"
+        )),
+    }
+}
+
 fn event(e: String) {
     EVENTS.lock().unwrap_or_else(|e| e.into_inner()).push(e);
 }
@@ -332,6 +379,21 @@ mod tests {
         );
         assert!(!path.exists(), "the older entry goes");
         assert!(dir.join(other.file_name()).exists(), "the newer stays");
+
+        // Written behind: the entry is there once `finish_writes` has waited for it, and
+        // the events say so; without write-behind, `store_owned` is done when it returns.
+        let behind = Key::new("test", &[b"behind"]);
+        take_events();
+        write_behind(true);
+        store_owned("test", behind, vec![a.clone(), b.clone()]);
+        assert_eq!(finish_writes(), 1);
+        write_behind(false);
+        assert_eq!(load("test", &behind), Some(vec![a.clone(), b.clone()]));
+        assert!(take_events().iter().any(|e| e == "stored test"));
+        let now = Key::new("test", &[b"now"]);
+        store_owned("test", now, vec![b.clone()]);
+        assert_eq!(finish_writes(), 0);
+        assert_eq!(load("test", &now), Some(vec![b.clone()]));
         disable();
         assert!(load("test", &key).is_none());
         let _ = std::fs::remove_dir_all(&dir);

@@ -409,7 +409,11 @@ fn main() {
         glint::image::remove_pending_temp();
         std::process::exit(130);
     });
-    if let Err(e) = run(Cli::parse()) {
+    let result = run(Cli::parse());
+    // Cache entries still being written (`cache::write_behind`) are finished, whatever
+    // happened, so that the next render finds them.
+    let _ = glint::cache::finish_writes();
+    if let Err(e) = result {
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
@@ -433,6 +437,8 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             if let Some(dir) = glint::cache::default_dir().filter(|_| !no_cache) {
                 glint::cache::enable(dir);
+                // `main` waits for the writes before the process ends.
+                glint::cache::write_behind(true);
             }
             if same_file(&scene, &output) {
                 bail!(
@@ -583,6 +589,17 @@ fn run(cli: Cli) -> Result<()> {
             };
             bar.finish();
             glint::stages::time("write", || sink.finish(&output))?;
+            let t_wait = Instant::now();
+            if glint::cache::finish_writes() > 0 {
+                glint::stages::record("cache wait", t_wait.elapsed());
+            }
+            for e in glint::cache::take_events() {
+                if e.starts_with("warning") {
+                    eprintln!("{e}");
+                } else if verbose {
+                    eprintln!("cache: {e}");
+                }
+            }
             println!(
                 "{}: {}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",
                 output.display(),

@@ -612,8 +612,11 @@ impl CachedMesh {
             short_faces.len() as u32,
             short_faces.first().copied().unwrap_or(0) as u32,
         ];
-        let normals: &[u32] = normals.map_or(&[], |n| bytemuck::cast_slice(n));
-        crate::cache::store("mesh", key, &[&vertices, normals, &short]);
+        let normals: Vec<u32> = normals.map_or(Vec::new(), |n| bytemuck::cast_slice(n).to_vec());
+        // The text's vertices are already a copy of their own: written on a thread of
+        // their own where the program lets the cache write behind (`glint render` does),
+        // while the scene is flattened and its BVH built.
+        crate::cache::store_owned("mesh", *key, vec![vertices, normals, short.to_vec()]);
     }
 }
 
