@@ -182,6 +182,18 @@ impl SceneBuffers {
         })
     }
 
+    /// Frees the geometry: the triangles, the BVH, the primitive ids, the vertex normals
+    /// and the CPU's leaf-order copy. The parameters keep the counts (`params.n_triangles`,
+    /// `n_nodes`); nothing can be traced from these buffers any more. For a caller whose
+    /// device holds its own copy (`Kernel::render_bands_rgba8_releasing`).
+    pub fn release_geometry(&mut self) {
+        self.triangles = Vec::new();
+        self.nodes = Vec::new();
+        self.prim_ids = Vec::new();
+        self.normals = Vec::new();
+        self.leaf_triangles = std::sync::OnceLock::new();
+    }
+
     /// Puts buffers together from their parts and builds the BVH over the primitives;
     /// `params.n_spheres`, `n_triangles`, `n_lights` and `n_nodes` are set from the parts,
     /// `params.samples` is at least 1, and no triangle is smooth (`normals` is empty).

@@ -470,7 +470,7 @@ fn run(cli: Cli) -> Result<()> {
             )?;
             // Only the f64 tracer reads the scene's primitives once they are flat, so the
             // others hand them over (the dragon's are 35 MB, a sixth of the former peak).
-            let buf = if matches!(backend, Backend::CpuF64) {
+            let mut buf = if matches!(backend, Backend::CpuF64) {
                 SceneBuffers::new(&s, w, h, algo)
             } else {
                 SceneBuffers::from_scene_taking(&mut s, w, h, algo)
@@ -493,31 +493,34 @@ fn run(cli: Cli) -> Result<()> {
             let mut frame = std::time::Duration::ZERO;
             // The frame in bands of `band` rows, each written to the PNG as it comes: memory
             // stays bounded by a band, whatever the frame size.
-            let cpu_bands =
-                |sink: &mut Sink, frame: &mut std::time::Duration, f64: bool| -> Result<()> {
-                    let mut y = 0;
-                    while y < h {
-                        let rows = cpu_band.min(h - y);
-                        let t = Instant::now();
-                        let px = if f64 {
-                            glint::cpu::render_f64_rows(&s, &buf, spec, y, rows)
-                        } else {
-                            glint::cpu::render_f32_rows(&buf, spec, y, rows)
-                        };
-                        *frame += t.elapsed();
-                        glint::stages::time("encode", || sink.write_rows(&px))?;
-                        y += rows;
-                        bar.show(y, h);
-                    }
-                    Ok(())
-                };
+            let cpu_bands = |buf: &SceneBuffers,
+                             sink: &mut Sink,
+                             frame: &mut std::time::Duration,
+                             f64: bool|
+             -> Result<()> {
+                let mut y = 0;
+                while y < h {
+                    let rows = cpu_band.min(h - y);
+                    let t = Instant::now();
+                    let px = if f64 {
+                        glint::cpu::render_f64_rows(&s, buf, spec, y, rows)
+                    } else {
+                        glint::cpu::render_f32_rows(buf, spec, y, rows)
+                    };
+                    *frame += t.elapsed();
+                    glint::stages::time("encode", || sink.write_rows(&px))?;
+                    y += rows;
+                    bar.show(y, h);
+                }
+                Ok(())
+            };
             let what = match renderer.tracer() {
                 glint::Tracer::Cpu => {
-                    cpu_bands(&mut sink, &mut frame, false)?;
+                    cpu_bands(&buf, &mut sink, &mut frame, false)?;
                     glint::cpu::describe_f32()
                 }
                 glint::Tracer::CpuF64 => {
-                    cpu_bands(&mut sink, &mut frame, true)?;
+                    cpu_bands(&buf, &mut sink, &mut frame, true)?;
                     "cpu-f64".to_string()
                 }
                 glint::Tracer::Gpu(gpu) | glint::Tracer::GpuRq(gpu) => {
@@ -529,11 +532,12 @@ fn run(cli: Cli) -> Result<()> {
                     };
                     let mut written: Result<(), glint::image::ImageError> = Ok(());
                     let result = match &mut sink {
-                        // A PNG holds 8 bits a channel: the shader packs them (the lean frame).
-                        Sink::Png(png) => kernel.render_bands_rgba8(
+                        // A PNG holds 8 bits a channel: the shader packs them (the lean
+                        // frame). The host's geometry is freed once uploaded.
+                        Sink::Png(png) => kernel.render_bands_rgba8_releasing(
                             &gpu.device,
                             &gpu.queue,
-                            &buf,
+                            &mut buf,
                             spec,
                             band,
                             &mut on_band(&mut written, &bar, w, h, |px| png.write_rgba8_rows(px)),
@@ -580,7 +584,7 @@ fn run(cli: Cli) -> Result<()> {
                             if backend == Backend::Auto =>
                         {
                             eprintln!("note: {e}; so the CPU tracer renders this");
-                            cpu_bands(&mut sink, &mut frame, false)?;
+                            cpu_bands(&buf, &mut sink, &mut frame, false)?;
                             glint::cpu::describe_f32()
                         }
                         Err(e) => return Err(e.into()),
@@ -605,7 +609,7 @@ fn run(cli: Cli) -> Result<()> {
                 output.display(),
                 w,
                 h,
-                buf.triangles.len(),
+                buf.params.n_triangles,
                 algo,
                 buf.spheres.len(),
                 frame.as_secs_f64() * 1e3,

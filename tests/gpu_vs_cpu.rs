@@ -378,6 +378,28 @@ fn lean_frame_is_the_mirror_quantised() {
                 want.clone()
             };
             lean_agreement(&got, &want, lavapipe).unwrap_or_else(|e| panic!("{what}: {e}"));
+            // What `glint render` calls: the same bytes, and the host's geometry freed
+            // once the device has it (the counts kept).
+            let mut released = buf.clone();
+            let w = buf.params.width as usize;
+            let mut again = vec![0u32; got.len()];
+            kernel
+                .render_bands_rgba8_releasing(
+                    &gpu.device,
+                    &gpu.queue,
+                    &mut released,
+                    spec,
+                    37,
+                    &mut |y, px| {
+                        again[y as usize * w..y as usize * w + px.len()].copy_from_slice(px)
+                    },
+                )
+                .expect("GPU render (lean frame, releasing)");
+            lean_agreement(&again, &want, lavapipe)
+                .unwrap_or_else(|e| panic!("{what}, releasing: {e}"));
+            assert!(released.triangles.is_empty() && released.nodes.is_empty());
+            assert!(released.prim_ids.is_empty() && released.normals.is_empty());
+            assert_eq!(released.params, buf.params, "{what}: the counts stay");
             eprintln!("{what}: {} pixels equal in every byte", want.len());
         }
     }

@@ -137,6 +137,28 @@ pub fn tile_rows(device: &wgpu::Device, width: u32, height: u32) -> u32 {
     by_pixels.min(by_dispatch).min(height as u64) as u32
 }
 
+/// The scene a render reads: kept as it is, or freed of its geometry once uploaded.
+enum Source<'a> {
+    Kept(&'a SceneBuffers),
+    Released(&'a mut SceneBuffers),
+}
+
+impl Source<'_> {
+    fn get(&self) -> &SceneBuffers {
+        match self {
+            Source::Kept(b) => b,
+            Source::Released(b) => b,
+        }
+    }
+
+    /// Frees the geometry where the caller gave it up (see `render_bands_rgba8_releasing`).
+    fn release(&mut self) {
+        if let Source::Released(b) = self {
+            b.release_geometry();
+        }
+    }
+}
+
 impl Kernel {
     /// Compiles the shader module on `device` (pipelines are made on first use).
     pub fn new(device: &wgpu::Device) -> Result<Kernel, GpuError> {
@@ -433,7 +455,15 @@ impl Kernel {
         max_rows: u32,
         band: &mut dyn FnMut(u32, &[[f32; 4]]),
     ) -> Result<GpuTimings, GpuError> {
-        self.bands(device, queue, buf, spec, Entry::Render, max_rows, band)
+        self.bands(
+            device,
+            queue,
+            Source::Kept(buf),
+            spec,
+            Entry::Render,
+            max_rows,
+            band,
+        )
     }
 
     /// [`Kernel::render_bands`] for an 8-bit image, the lean frame: each pixel is
@@ -449,7 +479,28 @@ impl Kernel {
         max_rows: u32,
         band: &mut dyn FnMut(u32, &[u32]),
     ) -> Result<GpuTimings, GpuError> {
-        self.bands(device, queue, buf, spec, Entry::RenderRgba8, max_rows, band)
+        let src = Source::Kept(buf);
+        self.bands(device, queue, src, spec, Entry::RenderRgba8, max_rows, band)
+    }
+
+    /// [`Kernel::render_bands_rgba8`] for a caller that has no use for `buf`'s geometry once
+    /// the device holds it: the triangles, BVH, primitive ids and vertex normals are freed
+    /// as soon as they are uploaded ([`SceneBuffers::release_geometry`]), so the host's copy
+    /// and the device's are not both held while the frame is traced (on a CPU Vulkan such
+    /// as lavapipe, device memory is the host's). An error before the upload is done (a
+    /// scene too large for the device, say) frees nothing, so the caller can still trace
+    /// `buf` on the CPU.
+    pub fn render_bands_rgba8_releasing(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &mut SceneBuffers,
+        spec: Specialisation,
+        max_rows: u32,
+        band: &mut dyn FnMut(u32, &[u32]),
+    ) -> Result<GpuTimings, GpuError> {
+        let src = Source::Released(buf);
+        self.bands(device, queue, src, spec, Entry::RenderRgba8, max_rows, band)
     }
 
     /// The render entry point `entry` in tiles, each tile's pixels (of type `T`, as that
@@ -459,12 +510,13 @@ impl Kernel {
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        buf: &SceneBuffers,
+        mut src: Source<'_>,
         spec: Specialisation,
         entry: Entry,
         max_rows: u32,
         band: &mut dyn FnMut(u32, &[T]),
     ) -> Result<GpuTimings, GpuError> {
+        let buf = src.get();
         let (width, height) = (buf.params.width, buf.params.height);
         let mut timings = GpuTimings::default();
         let (pipeline, compile) = self.pipeline(device, spec, entry)?;
@@ -529,6 +581,9 @@ impl Kernel {
             entries: &entries,
         });
         timings.upload = t0.elapsed().saturating_sub(timings.accel);
+        // From here on only the parameters are read from the host.
+        let frame_params = buf.params;
+        src.release();
 
         let mut y = 0;
         while y < height {
@@ -538,7 +593,7 @@ impl Kernel {
                 tile_y: y,
                 tile_width: width,
                 tile_height: h,
-                ..buf.params
+                ..frame_params
             };
             let t1 = Instant::now();
             queue.write_buffer(&scene[0], 0, bytemuck::bytes_of(&params));
