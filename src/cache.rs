@@ -9,8 +9,9 @@
 //! old glint's entry. An entry carries an XXH3-64 checksum of its payload; an entry that
 //! fails it, or is cut short, or names another key, is deleted and rebuilt, with one
 //! warning. Entries are written to a temporary name and renamed into place, so a reader
-//! never sees half of one, and the folder is kept under a size limit (oldest entries go
-//! first). Imports nothing from glint.
+//! never sees half of one (an interrupted process removes its temporary files, and a prune
+//! removes any left an hour old), and the folder is kept under a size limit (oldest entries
+//! go first). Imports nothing from glint.
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -34,6 +35,13 @@ const DEFAULT_MIB: u64 = 2048;
 /// Default least number of primitives worth an entry (`GLINT_CACHE_MIN_PRIMS` changes it):
 /// below it, the work takes a few milliseconds and an entry would only take disk.
 const DEFAULT_MIN_PRIMS: usize = 100_000;
+
+/// How old a temporary file in the folder must be for a prune to take it for one that a
+/// killed process left (a live writer renames its file within seconds).
+pub const STALE_TEMP: std::time::Duration = std::time::Duration::from_secs(3600);
+
+/// The temporary files being written now ([`remove_pending_temps`]).
+static TEMPS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 /// The folder, once [`enable`]d.
 static DIR: Mutex<Option<PathBuf>> = Mutex::new(None);
@@ -258,6 +266,8 @@ fn write_entry(dir: &Path, key: &Key, sections: &[&[u32]]) -> std::io::Result<()
         h.update(bytemuck::cast_slice(s));
     }
     let tmp = dir.join(format!("{}.{}.tmp", key.file_name(), std::process::id()));
+    let temps = || TEMPS.lock().unwrap_or_else(|e| e.into_inner());
+    temps().push(tmp.clone());
     let result = (|| {
         let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
         f.write_all(MAGIC)?;
@@ -280,7 +290,18 @@ fn write_entry(dir: &Path, key: &Key, sections: &[&[u32]]) -> std::io::Result<()
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    temps().retain(|p| *p != tmp);
     result
+}
+
+/// Removes the temporary files of the entries being written now (for an interrupted
+/// process: `glint render`'s Ctrl-C handler calls it, so that no half-written file is left
+/// in the folder). A file that an interrupt leaves anyway is removed by a later prune once
+/// it is [`STALE_TEMP`] old.
+pub fn remove_pending_temps() {
+    for p in std::mem::take(&mut *TEMPS.lock().unwrap_or_else(|e| e.into_inner())) {
+        let _ = std::fs::remove_file(p);
+    }
 }
 
 /// The folder's size limit: `GLINT_CACHE_MIB` (default 2048) MiB.
@@ -298,8 +319,21 @@ fn prune(dir: &Path, limit: u64) {
     let Ok(read) = std::fs::read_dir(dir) else {
         return;
     };
-    let mut entries: Vec<(std::time::SystemTime, u64, PathBuf)> = read
-        .filter_map(|e| e.ok())
+    let files: Vec<std::fs::DirEntry> = read.filter_map(|e| e.ok()).collect();
+    // Temporary files that a killed process left (see `STALE_TEMP`).
+    let now = std::time::SystemTime::now();
+    for e in files
+        .iter()
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+    {
+        let age = e.metadata().and_then(|m| m.modified()).ok();
+        let age = age.and_then(|t| now.duration_since(t).ok());
+        if age.is_some_and(|a| a > STALE_TEMP) && std::fs::remove_file(e.path()).is_ok() {
+            event(format!("removed {}", e.path().display()));
+        }
+    }
+    let mut entries: Vec<(std::time::SystemTime, u64, PathBuf)> = files
+        .iter()
         .filter(|e| e.file_name().to_string_lossy().ends_with(".bin"))
         .filter_map(|e| {
             let m = e.metadata().ok()?;
@@ -379,6 +413,22 @@ mod tests {
         );
         assert!(!path.exists(), "the older entry goes");
         assert!(dir.join(other.file_name()).exists(), "the newer stays");
+
+        // A temporary file that a killed writer left goes once it is stale; one that may
+        // still be being written stays.
+        let (stale, fresh) = (dir.join("a.1.tmp"), dir.join("b.2.tmp"));
+        std::fs::write(&stale, b"half").unwrap();
+        std::fs::write(&fresh, b"half").unwrap();
+        let long_ago = std::time::SystemTime::now() - STALE_TEMP * 2;
+        let f = std::fs::File::options().write(true).open(&stale).unwrap();
+        f.set_modified(long_ago).unwrap();
+        prune(&dir, u64::MAX);
+        assert!(!stale.exists(), "a stale temporary file goes");
+        assert!(fresh.exists(), "a fresh one stays");
+        // And an interrupt's handler removes the files being written.
+        TEMPS.lock().unwrap().push(fresh.clone());
+        remove_pending_temps();
+        assert!(!fresh.exists());
 
         // Written behind: the entry is there once `finish_writes` has waited for it, and
         // the events say so; without write-behind, `store_owned` is done when it returns.

@@ -404,9 +404,11 @@ fn main() {
         libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
     }
     // SIGINT / SIGTERM: remove the half-written temporary image (the output file itself is
-    // only ever replaced whole), then exit as interrupted.
+    // only ever replaced whole) and the cache entries' temporary files, then exit as
+    // interrupted.
     let _ = ctrlc::set_handler(|| {
         glint::image::remove_pending_temp();
+        glint::cache::remove_pending_temps();
         std::process::exit(130);
     });
     let result = run(Cli::parse());
