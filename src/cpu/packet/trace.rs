@@ -189,7 +189,7 @@ pub struct PacketHits {
 
 /// A packet's step at interior node `node` (index `at`) for the lanes in `lanes`: both
 /// children's boxes tested per lane against `bound`; where some lanes enter both, the
-/// nearer by the vote of those lanes comes next and the other is pushed with its lanes.
+/// nearer along the split axis comes next and the other is pushed with its lanes.
 /// Returns the child to visit next with its lanes, or `None` when no lane enters either.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -206,18 +206,21 @@ pub(super) fn descend<O: Origins>(
 ) -> Option<(u32, Mask)> {
     let nodes = &g.buf.nodes;
     let (left, right) = (&nodes[at as usize + 1], &nodes[node.first as usize]);
-    let mut near_l = [0.0f32; LANES];
-    let mut near_r = [0.0f32; LANES];
-    let ml = box_lanes(left, r, t_min, bound, &mut near_l) & lanes;
-    let mr = box_lanes(right, r, t_min, bound, &mut near_r) & lanes;
+    // The entry distances are not needed here (the order comes from the split axis).
+    let mut near = [0.0f32; LANES];
+    let ml = box_lanes(left, r, t_min, bound, &mut near) & lanes;
+    let mr = box_lanes(right, r, t_min, bound, &mut near) & lanes;
     if ml != 0 && mr != 0 {
-        let both = ml & mr;
-        let mut vote = 0i32;
-        for l in 0..LANES {
-            let w = ((both >> l) & 1) as i32;
-            vote += w * if near_r[l] < near_l[l] { 1 } else { -1 };
-        }
-        let (near, far) = if vote > 0 {
+        // The nearer child by the split axis and the direction of the first lane that
+        // enters either: the left child holds the lower centres on that axis, so a ray
+        // running down it meets the right child first. (It was a vote of the lanes that
+        // enter both, by their entry distances: sixteen comparisons a step for an order
+        // that the axis gives as well; the order changes no lane's answer, see
+        // `closest_hit_packet`. Interleaved, `glint bench`, 3 rounds: dragon 0.93, bunny
+        // 0.97, peers 1M 0.97, 100k 0.98.)
+        let axis = ((node.count_axis & 3) as usize).min(2);
+        let lead = (ml | mr).trailing_zeros() as usize;
+        let (near, far) = if r.dir[axis][lead] < 0.0 {
             ((node.first, mr), (at + 1, ml))
         } else {
             ((at + 1, ml), (node.first, mr))
