@@ -4,7 +4,8 @@
 // the module; the pipeline is made from it only where the device has `Features::SUBGROUP`.
 //
 // One packet per subgroup: the node index and the stack are the same in every lane, the
-// visits decided by votes, and each BVH node and leaf triangle fetched cooperatively: lane
+// visits decided by `subgroupAny` (the nearer child first, by the split axis and lane 0's
+// direction), and each BVH node and leaf triangle fetched cooperatively: lane
 // r < 8 loads the node's dword r through a plain `array<u32>` view of the same buffer, and
 // eight constant-index shuffles hand every lane the whole node (on lavapipe a per-lane load
 // inside a loop is a per-lane loop with a bounds check per dword; a constant shuffle is one
@@ -45,12 +46,6 @@ fn fetch_triangle(k: u32, r: u32) -> Triangle {
     );
 }
 
-/// The number of lanes whose `b` is true.
-fn votes(b: bool) -> u32 {
-    let v = subgroupBallot(b);
-    return countOneBits(v.x) + countOneBits(v.y) + countOneBits(v.z) + countOneBits(v.w);
-}
-
 /// `closest_hit_bvh` for the subgroup as one packet (see the top of this file). Falls
 /// back to the per-ray traversal when lanes 0..7 are not all active (the edge of a tile,
 /// the last rays of a query, a subgroup narrower than 8).
@@ -70,6 +65,7 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     if !subgroupAny(live) {
         return best;
     }
+    let dir0 = subgroupShuffle(ray.dir, 0u);
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
     var at = 0u;
@@ -85,8 +81,11 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
             let any_left = subgroupAny(hit_left);
             let any_right = subgroupAny(hit_right);
             if any_left && any_right {
-                let both = hit_left && hit_right;
-                let right_first = votes(both && right.x < left.x) > votes(both && !(right.x < left.x));
+                // The nearer child by the split axis and lane 0's direction (the left child
+                // holds the lower centres): no vote, and the order changes no lane's answer.
+                let axis = node.count_axis & 3u;
+                let d = select(select(dir0.x, dir0.y, axis == 1u), dir0.z, axis == 2u);
+                let right_first = d < 0.0;
                 if right_first {
                     stack[sp] = (at + 1u) | select(0u, 0x80000000u, hit_left);
                     at = node.first;
