@@ -34,9 +34,20 @@ top="$PWD"
 out=bench-out/ab
 mkdir -p "$out"
 
+# The sources of the working tree touched: a build of a revision in a worktree (below)
+# shares this project's target folder and leaves a fingerprint newer than any file edited
+# before it, and cargo then took the working tree for built: the "worktree" binary was the
+# revision's (found in session 12: three A/B runs had compared A with A). Touched, they are
+# rebuilt; the user's next `cargo build` is right too.
+touch_sources() {
+    git ls-files -z -- src shaders tests examples benches build.rs Cargo.toml Cargo.lock |
+        xargs -0 touch
+}
+
 build() { # rev -> path of its release binary
     local rev="$1" dir sha
     if [ "$rev" = worktree ]; then
+        touch_sources
         cargo build --release --locked -q >&2
         cp target/release/glint "$out/glint-worktree"
         echo "$out/glint-worktree"
@@ -52,6 +63,7 @@ build() { # rev -> path of its release binary
         (cd "$dir" && CARGO_TARGET_DIR="$top/target" cargo build --release --locked -q >&2)
         cp target/release/glint "$out/glint-$sha"
         git worktree remove --force "$dir" >&2
+        touch_sources
     fi
     echo "$out/glint-$sha"
 }
