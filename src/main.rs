@@ -451,14 +451,6 @@ fn run(cli: Cli) -> Result<()> {
             let start = Instant::now();
             // Before any work: the folder exists and a file can be made there.
             glint::image::check_writable(&output)?;
-            // The device starts (adapters, device, the shader module) on a thread of its
-            // own while the scene loads: neither needs the other.
-            let starting = {
-                let (backend, adapter) = (backend, adapter.clone());
-                std::thread::spawn(move || {
-                    glint::Renderer::with_adapter(backend.into(), adapter.as_deref())
-                })
-            };
             let mut s = load(&scene, confine)?;
             s.camera.samples = samples.unwrap_or(s.camera.samples);
             let (w, h) = size.unwrap_or(s.size());
@@ -493,9 +485,7 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
             let spec = Specialisation::for_scene(&buf);
-            let renderer = starting
-                .join()
-                .map_err(|_| anyhow::anyhow!("the device's start panicked"))??;
+            let renderer = glint::Renderer::with_adapter(backend.into(), adapter.as_deref())?;
             if let Some(note) = renderer.note() {
                 eprintln!("note: {note}");
             }
