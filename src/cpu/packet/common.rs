@@ -98,6 +98,9 @@ pub(super) struct Lanes<O> {
     pub(super) iz: [f32; LANES],
     /// `dir.dot(dir)` of each lane (`V3::dot`'s order).
     pub(super) dd: [f32; LANES],
+    /// Which axes the directions run down, where every lane's runs the same way on every
+    /// axis and each reciprocal is finite and not 0 (`None` otherwise).
+    pub(super) neg: Option<[bool; 3]>,
 }
 
 impl<O> Lanes<O> {
@@ -111,12 +114,25 @@ impl<O> Lanes<O> {
             iy: [0.0; LANES],
             iz: [0.0; LANES],
             dd: [0.0; LANES],
+            neg: None,
         };
         for l in 0..LANES {
             r.ix[l] = 1.0 / dir[0][l];
             r.iy[l] = 1.0 / dir[1][l];
             r.iz[l] = 1.0 / dir[2][l];
             r.dd[l] = dot_lane(dir, dir, l);
+        }
+        let neg = [dir[0][0] < 0.0, dir[1][0] < 0.0, dir[2][0] < 0.0];
+        let mut same = [true; LANES];
+        for l in 0..LANES {
+            let inv = [r.ix[l], r.iy[l], r.iz[l]];
+            for k in 0..3 {
+                let ok = inv[k].is_finite() && inv[k] != 0.0 && (inv[k] < 0.0) == neg[k];
+                same[l] &= ok;
+            }
+        }
+        if same.iter().all(|&s| s) {
+            r.neg = Some(neg);
         }
         r
     }

@@ -25,6 +25,12 @@ use crate::kernel::real::V3;
 /// `box_interval` for every lane at once: the lanes whose ray meets `node`'s box in
 /// (t_min, bound), and each lane's entry distance. The same operations as
 /// `box_interval`, lane by lane.
+///
+/// Where every lane's direction runs the same way on each axis with finite, non-zero
+/// reciprocals (`Lanes::neg`), the near and far planes are picked once for the packet
+/// instead of by a compare and two selects a lane and axis. Same values: with such a
+/// reciprocal, the product with the far plane is never below the product with the near
+/// one, and where the two are equal they are the same bits (`box_picks_like_the_compare`).
 #[inline(always)]
 pub(super) fn box_lanes<O: Origins>(
     node: &BvhNode,
@@ -34,6 +40,34 @@ pub(super) fn box_lanes<O: Origins>(
     near_out: &mut [f32; LANES],
 ) -> Mask {
     let mut hit = [false; LANES];
+    if let Some(neg) = r.neg {
+        let pick = |a: &[f32; 3], b: &[f32; 3]| [0, 1, 2].map(|k| if neg[k] { b[k] } else { a[k] });
+        let (near_p, far_p) = (pick(&node.lo, &node.hi), pick(&node.hi, &node.lo));
+        for l in 0..LANES {
+            let n = r.origin.rel(&near_p, l);
+            let f = r.origin.rel(&far_p, l);
+            let nx = n[0] * r.ix[l];
+            let ny = n[1] * r.iy[l];
+            let nz = n[2] * r.iz[l];
+            let mut fx = f[0] * r.ix[l];
+            let mut fy = f[1] * r.iy[l];
+            let mut fz = f[2] * r.iz[l];
+            fx = fx + fx.abs() * BOX_SLACK;
+            fy = fy + fy.abs() * BOX_SLACK;
+            fz = fz + fz.abs() * BOX_SLACK;
+            let mut t0 = t_min;
+            let mut t1 = bound[l];
+            t0 = if nx > t0 { nx } else { t0 };
+            t0 = if ny > t0 { ny } else { t0 };
+            t0 = if nz > t0 { nz } else { t0 };
+            t1 = if fx < t1 { fx } else { t1 };
+            t1 = if fy < t1 { fy } else { t1 };
+            t1 = if fz < t1 { fz } else { t1 };
+            near_out[l] = t0;
+            hit[l] = t0 <= t1;
+        }
+        return mask_of(&hit);
+    }
     for l in 0..LANES {
         let lo = r.origin.rel(&node.lo, l);
         let hi = r.origin.rel(&node.hi, l);
@@ -822,4 +856,105 @@ pub(super) fn phong_power_lanes(
         }
     }
     result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// xorshift64*, uniform in [0, 1).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.next()
+        }
+    }
+
+    /// `box_lanes` on a uniform-sign packet, then on the same packet sent down the compare.
+    fn check<O: Origins>(
+        case: usize,
+        node: &BvhNode,
+        t_min: f32,
+        bound: &[f32; LANES],
+        mut r: Lanes<O>,
+    ) {
+        assert!(r.neg.is_some(), "case {case}: a uniform-sign packet");
+        let (mut a, mut b) = ([0.0f32; LANES], [0.0f32; LANES]);
+        let ma = box_lanes(node, &r, t_min, bound, &mut a);
+        r.neg = None;
+        let mb = box_lanes(node, &r, t_min, bound, &mut b);
+        assert_eq!(ma, mb, "case {case}: mask");
+        assert_eq!(
+            a.map(f32::to_bits),
+            b.map(f32::to_bits),
+            "case {case}: entry"
+        );
+    }
+
+    /// The packet-wide plane pick gives the per-lane compare's mask and entry distances in
+    /// every bit: uniform-sign packets against random boxes, flat boxes, boxes with a face
+    /// through the origin and boxes around it, shared and per-lane origins.
+    #[test]
+    fn box_picks_like_the_compare() {
+        let mut rng = Rng(0x0b0c_5eed);
+        for case in 0..20_000 {
+            let sign = [0, 1, 2].map(|k| if (case >> k) & 1 == 1 { -1.0f32 } else { 1.0 });
+            let scale = [1e-3f32, 1.0, 1e3][case % 3];
+            let mut dir = [[0.0f32; LANES]; 3];
+            let mut org = [[0.0f32; LANES]; 3];
+            for l in 0..LANES {
+                for k in 0..3 {
+                    dir[k][l] = sign[k] * rng.range(1e-3, 1.0);
+                    org[k][l] = rng.range(-1.0, 1.0) * scale;
+                }
+            }
+            let o0 = [org[0][0], org[1][0], org[2][0]];
+            let mut lo = [0, 1, 2].map(|_| rng.range(-2.0, 2.0) * scale);
+            let mut hi = [0, 1, 2].map(|k| lo[k] + rng.range(0.0, 2.0) * scale);
+            match case % 5 {
+                0 => hi[case % 3] = lo[case % 3], // flat
+                1 => lo[case % 3] = o0[case % 3], // a face through lane 0's origin
+                2 => hi[case % 3] = o0[case % 3],
+                3 => (lo, hi) = (o0.map(|v| v - scale), o0.map(|v| v + scale)), // around it
+                _ => {}
+            }
+            let node = BvhNode {
+                lo,
+                first: 0,
+                hi,
+                count_axis: 0,
+            };
+            let bound = [0; LANES].map(|_| rng.range(0.0, 4.0) * scale);
+            let t_min = if case % 2 == 0 { 0.0 } else { 1e-4 * scale };
+            let shared = Lanes::new(Shared(V3::new(o0[0], o0[1], o0[2])), &dir);
+            check(case, &node, t_min, &bound, shared);
+            check(case, &node, t_min, &bound, Lanes::new(PerLane(org), &dir));
+        }
+        // A zero or mixed-sign component leaves the packet on the compare.
+        let mut dir = [[0.5f32; LANES]; 3];
+        dir[1][3] = 0.0;
+        assert!(
+            Lanes::new(Shared(V3::new(0.0, 0.0, 0.0)), &dir)
+                .neg
+                .is_none()
+        );
+        dir[1][3] = -0.5;
+        assert!(
+            Lanes::new(Shared(V3::new(0.0, 0.0, 0.0)), &dir)
+                .neg
+                .is_none()
+        );
+        dir[1][3] = f32::NAN;
+        assert!(
+            Lanes::new(Shared(V3::new(0.0, 0.0, 0.0)), &dir)
+                .neg
+                .is_none()
+        );
+    }
 }
