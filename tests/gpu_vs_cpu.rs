@@ -248,8 +248,8 @@ fn shading_edge_cases_agree() {
 /// Both traversals of the compute tracer, the per-ray one (`trace.wgsl`'s own) and the
 /// packet one (`trace_subgroup.wgsl`: one packet per subgroup, where the device has
 /// subgroups), give the CPU mirror's image in every bit, on the seed scenes, a shadowed
-/// mesh and the vertex grid, with every triangle algorithm; and their `query` entry points
-/// give the mirror's hits.
+/// mesh and the vertex grid with and without shadows, with every triangle algorithm; and
+/// their `query` entry points give the mirror's hits.
 #[test]
 fn both_traversals_agree() {
     let Some(gpu) = common::gpu() else { return };
@@ -274,6 +274,13 @@ fn both_traversals_agree() {
     scenes.push((
         "vertex grid".into(),
         glint::scene::Scene::parse(&grid, std::path::Path::new("grid.toml")).unwrap(),
+    ));
+    // The same bumpy field with shadows on: shadow rays leave it together (the packet
+    // `occluded_bvh`), and its bumps shadow each other.
+    let shadowed = grid.replacen("ambient =", "shadows = true\nambient =", 1);
+    scenes.push((
+        "vertex grid, shadows".into(),
+        glint::scene::Scene::parse(&shadowed, std::path::Path::new("grid.toml")).unwrap(),
     ));
     for (name, scene) in &scenes {
         for algo in TriangleAlgorithm::ALL {

@@ -31,6 +31,7 @@ use crate::kernel::real::V3;
 /// instead of by a compare and two selects a lane and axis. Same values: with such a
 /// reciprocal, the product with the far plane is never below the product with the near
 /// one, and where the two are equal they are the same bits (`box_picks_like_the_compare`).
+/// `node`'s box must have lo <= hi on every axis, as every box the builder makes has.
 #[inline(always)]
 pub(super) fn box_lanes<O: Origins>(
     node: &BvhNode,
@@ -923,6 +924,10 @@ mod tests {
                 2 => hi[case % 3] = o0[case % 3],
                 3 => (lo, hi) = (o0.map(|v| v - scale), o0.map(|v| v + scale)), // around it
                 _ => {}
+            }
+            for k in 0..3 {
+                // A node's box has lo <= hi on every axis (the builder's do).
+                (lo[k], hi[k]) = (lo[k].min(hi[k]), lo[k].max(hi[k]));
             }
             let node = BvhNode {
                 lo,
