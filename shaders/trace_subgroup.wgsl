@@ -20,6 +20,10 @@
 // blocks the ray in (t_min, t_max) does not depend on the order, nor do the box tests,
 // whose bound is t_max throughout.
 
+/// Whether shadow rays go in packets (`occluded_bvh` below) or each on its own
+/// (`occluded_bvh_ray`): set at pipeline creation (`Kernel::new_packet_with`).
+override PACKET_SHADOWS: bool = true;
+
 /// The BVH nodes (the `nodes` buffer) as dwords, 8 per node.
 @group(0) @binding(12) var<storage, read> node_words: array<u32>;
 /// The triangles (the `triangles` buffer) as dwords, 12 per triangle.
@@ -160,6 +164,9 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
 /// traversal when lanes 0..7 are not all active (a lane whose hit missed, faced away from
 /// the light or had no diffuse term does not call it).
 fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+    if !PACKET_SHADOWS {
+        return occluded_bvh_ray(ray, t_min, t_max, skip);
+    }
     if (subgroupBallot(true).x & 0xffu) != 0xffu {
         return occluded_bvh_ray(ray, t_min, t_max, skip);
     }

@@ -209,11 +209,7 @@ pub fn run(
                     med(&|t| t.readback),
                 ];
                 let accel = kernel.is_ray_query().then(|| med(&|t| t.accel));
-                let traversal = match (kernel.is_ray_query(), kernel.is_packet()) {
-                    (true, _) => None,
-                    (false, true) => Some("packet"),
-                    (false, false) => Some("per-ray"),
-                };
+                let traversal = (!kernel.is_ray_query()).then(|| kernel.traversal_name());
                 row(
                     tracer,
                     traversal,

@@ -562,7 +562,11 @@ fn run(cli: Cli) -> Result<()> {
                                 if rq {
                                     "gpu-rq"
                                 } else if kernel.is_packet() {
-                                    "gpu (packet traversal)"
+                                    if kernel.shadows_in_packets() {
+                                        "gpu (packet traversal)"
+                                    } else {
+                                        "gpu (packet traversal, shadow rays per ray)"
+                                    }
                                 } else {
                                     "gpu (per-ray traversal)"
                                 },
@@ -746,11 +750,7 @@ fn run(cli: Cli) -> Result<()> {
             println!(
                 "scene: {} at {w}x{h}, triangles: {algo}, traversal: {}",
                 scene.display(),
-                if gpu.compute_kernel(spec)?.is_packet() {
-                    "packet"
-                } else {
-                    "per-ray"
-                }
+                gpu.compute_kernel(spec)?.traversal_name()
             );
             println!(
                 "gpu vs cpu: {} differing pixels (8-bit), {} differing in some f32 bit, {} hit/miss disagreements, \

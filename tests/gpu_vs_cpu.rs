@@ -256,15 +256,20 @@ fn both_traversals_agree() {
     let lavapipe = common::is_lavapipe(gpu);
     let per_ray = glint::gpu::Kernel::new(&gpu.device).expect("per-ray kernel");
     assert!(!gpu.kernel.is_packet());
-    let packet = if gpu.device.features().contains(wgpu::Features::SUBGROUP) {
-        Some(glint::gpu::Kernel::new_packet(&gpu.device).expect("packet kernel"))
+    let subgroups = gpu.device.features().contains(wgpu::Features::SUBGROUP);
+    let (packet, packet_ray_shadows) = if subgroups {
+        let packet = |shadows| glint::gpu::Kernel::new_packet_with(&gpu.device, shadows);
+        (
+            Some(packet(true).expect("packet kernel")),
+            Some(packet(false).expect("packet kernel, shadow rays per ray")),
+        )
     } else {
         eprintln!(
             "\n*** no subgroups on {}: the packet traversal was NOT checked ***\n",
             gpu.describe()
         );
         assert!(gpu.packet_kernel().expect("kernel").is_none());
-        None
+        (None, None)
     };
     let mut scenes: Vec<(String, glint::scene::Scene)> = ["bb8-shadows", "mitsubishi", "umbrella"]
         .iter()
@@ -286,9 +291,14 @@ fn both_traversals_agree() {
         for algo in TriangleAlgorithm::ALL {
             let (buf, spec) = buffers(scene, 200, 150, algo);
             let c = glint::cpu::render_f32(&buf, spec);
-            for (what, k) in [("per-ray", Some(&per_ray)), ("packet", packet.as_ref())] {
+            let kernels = [
+                ("per-ray", Some(&per_ray)),
+                ("packet", packet.as_ref()),
+                ("packet, shadow rays per ray", packet_ray_shadows.as_ref()),
+            ];
+            for (what, k) in kernels {
                 let Some(k) = k else { continue };
-                assert_eq!(k.is_packet(), what == "packet");
+                assert_eq!(k.traversal_name(), what);
                 let g = k
                     .render(&gpu.device, &gpu.queue, &buf, spec, &mut |_, _| {})
                     .expect("render")
@@ -319,7 +329,10 @@ fn both_traversals_agree() {
         })
         .collect();
     let want = glint::cpu::query_f32(&buf, spec, &rays);
-    for k in [Some(&per_ray), packet.as_ref()].into_iter().flatten() {
+    for k in [Some(&per_ray), packet.as_ref(), packet_ray_shadows.as_ref()]
+        .into_iter()
+        .flatten()
+    {
         let got = k
             .query(&gpu.device, &gpu.queue, &buf, spec, &rays)
             .expect("query");
@@ -329,7 +342,7 @@ fn both_traversals_agree() {
             .filter(|(a, b)| bytemuck::bytes_of(*a) != bytemuck::bytes_of(*b))
             .count();
         if lavapipe {
-            assert_eq!(differ, 0, "query, packet = {}", k.is_packet());
+            assert_eq!(differ, 0, "query, {}", k.traversal_name());
         }
     }
 }

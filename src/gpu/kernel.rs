@@ -59,6 +59,7 @@ const RGBA8_BINDING: u32 = 14;
 pub struct Kernel {
     ray_query: bool,
     packet: bool,
+    packet_shadows: bool,
     module: wgpu::ShaderModule,
     render_layout: wgpu::BindGroupLayout,
     rgba8_layout: wgpu::BindGroupLayout,
@@ -166,14 +167,43 @@ impl Kernel {
     }
 
     /// The compute tracer with packet traversal (`shaders/trace_subgroup.wgsl`): one packet
-    /// per subgroup, the same image. The device must have `Features::SUBGROUP`.
+    /// per subgroup, the same image, shadow rays in packets too. The device must have
+    /// `Features::SUBGROUP`.
     pub fn new_packet(device: &wgpu::Device) -> Result<Kernel, GpuError> {
-        Kernel::with_flavour(device, false, true)
+        Kernel::new_packet_with(device, true)
+    }
+
+    /// [`Kernel::new_packet`], with shadow rays in packets or each on its own
+    /// (`PACKET_SHADOWS`, set at pipeline creation; the same image either way). See
+    /// [`super::packet_shadows_pay`] for which to choose.
+    pub fn new_packet_with(
+        device: &wgpu::Device,
+        shadows_in_packets: bool,
+    ) -> Result<Kernel, GpuError> {
+        let mut k = Kernel::with_flavour(device, false, true)?;
+        k.packet_shadows = shadows_in_packets;
+        Ok(k)
     }
 
     /// Whether this kernel traverses in packets (one per subgroup).
     pub fn is_packet(&self) -> bool {
         self.packet
+    }
+
+    /// Whether this kernel traces shadow rays in packets too (a packet kernel made so).
+    pub fn shadows_in_packets(&self) -> bool {
+        self.packet && self.packet_shadows
+    }
+
+    /// The traversal, as bench rows and `glint render` name it: "packet", "packet, shadow
+    /// rays per ray", "per-ray", or "ray query".
+    pub fn traversal_name(&self) -> &'static str {
+        match (self.ray_query, self.packet, self.packet_shadows) {
+            (true, _, _) => "ray query",
+            (false, true, true) => "packet",
+            (false, true, false) => "packet, shadow rays per ray",
+            (false, false, _) => "per-ray",
+        }
     }
 
     /// The ray-query tracer's kernel (`shaders/trace_rq.wgsl`): the same entry points and
@@ -254,6 +284,7 @@ impl Kernel {
             Kernel {
                 ray_query,
                 packet,
+                packet_shadows: packet,
                 render_pipeline_layout: pl(&render_layout),
                 rgba8_pipeline_layout: pl(&rgba8_layout),
                 query_pipeline_layout: pl(&query_layout),
@@ -282,7 +313,11 @@ impl Kernel {
             return Ok((p.clone(), Duration::ZERO));
         }
         let t0 = Instant::now();
-        let constants = spec.constants();
+        let mut constants = spec.constants().to_vec();
+        if self.packet {
+            let on = if self.packet_shadows { 1.0 } else { 0.0 };
+            constants.push(("PACKET_SHADOWS", on));
+        }
         let p = scoped(device, "pipeline creation", || {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("trace"),

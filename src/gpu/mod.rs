@@ -106,6 +106,32 @@ pub struct Gpu {
     pub start_time: Duration,
 }
 
+/// Whether shadow rays should go in packets on this adapter (measured, `docs/bench/ab.md`,
+/// session 13): yes, except on lavapipe before Mesa 24.3, which runs both sides of every
+/// branch, even where no lane takes one (24.3 skips an inactive branch): there the packet
+/// shadow traversal measured 1.19–1.24× slower on the seed's bb8 with shadows and level on
+/// the peers' scenes, against 0.82–0.93 on Mesa 25. A driver whose version cannot be read
+/// gets packets.
+pub fn packet_shadows_pay(info: &wgpu::AdapterInfo) -> bool {
+    if info.device_type != wgpu::DeviceType::Cpu {
+        return true;
+    }
+    match mesa_version(&info.driver_info) {
+        Some(v) => v >= (24, 3),
+        None => true,
+    }
+}
+
+/// (major, minor) of the first "Mesa X.Y" in a driver string, as lavapipe reports it
+/// ("Mesa 22.3.6 (LLVM 15.0.6)", "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)").
+pub fn mesa_version(driver_info: &str) -> Option<(u32, u32)> {
+    let rest = &driver_info[driver_info.find("Mesa ")? + 5..];
+    let mut parts = rest.split(|c: char| !c.is_ascii_digit());
+    let major = parts.next()?.parse().ok()?;
+    let minor = parts.next()?.parse().ok()?;
+    Some((major, minor))
+}
+
 /// The Vulkan adapters on this machine, best first: discrete GPU, integrated, virtual,
 /// then CPU implementations such as lavapipe.
 pub fn adapters() -> Vec<wgpu::Adapter> {
@@ -292,7 +318,7 @@ impl Gpu {
                 if self.device.features().contains(wgpu::Features::SUBGROUP)
                     && std::env::var("GLINT_TRAVERSAL").as_deref() != Ok("ray")
                 {
-                    Kernel::new_packet(&self.device).map(Some)
+                    Kernel::new_packet_with(&self.device, packet_shadows_pay(&self.info)).map(Some)
                 } else {
                     Ok(None)
                 }
@@ -336,5 +362,23 @@ impl Gpu {
             "{} ({:?}, {} {})",
             self.info.name, self.info.device_type, self.info.driver, self.info.driver_info
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mesa_version;
+
+    #[test]
+    fn mesa_versions_are_read_from_lavapipe_driver_strings() {
+        assert_eq!(mesa_version("Mesa 22.3.6 (LLVM 15.0.6)"), Some((22, 3)));
+        assert_eq!(
+            mesa_version("Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"),
+            Some((25, 0))
+        );
+        assert_eq!(mesa_version("Mesa 24.3"), Some((24, 3)));
+        assert_eq!(mesa_version("560.35.03"), None);
+        assert_eq!(mesa_version("Mesa x"), None);
+        assert_eq!(mesa_version(""), None);
     }
 }
