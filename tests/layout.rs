@@ -196,14 +196,20 @@ fn shader_constants_match_rust() {
     }
 }
 
-/// The two assembled variants parse and validate too: the packet traversal (subgroup
-/// operations) and the ray-query tracer, each with the capability its device must have.
+/// The assembled variants parse and validate too: the packet traversal (subgroup
+/// operations) with and without its shadow rays, and the ray-query tracer, each with the
+/// capability its device must have.
 #[test]
 fn variant_modules_parse_and_validate() {
     for (name, src, caps) in [
         (
             "trace_subgroup",
-            glint::gpu::subgroup::shader_source(),
+            glint::gpu::subgroup::shader_source(false),
+            naga::valid::Capabilities::SUBGROUP,
+        ),
+        (
+            "trace_subgroup + shadows",
+            glint::gpu::subgroup::shader_source(true),
             naga::valid::Capabilities::SUBGROUP,
         ),
         (

@@ -163,7 +163,7 @@ impl Source<'_> {
 impl Kernel {
     /// Compiles the shader module on `device` (pipelines are made on first use).
     pub fn new(device: &wgpu::Device) -> Result<Kernel, GpuError> {
-        Kernel::with_flavour(device, false, false)
+        Kernel::with_flavour(device, false, false, false)
     }
 
     /// The compute tracer with packet traversal (`shaders/trace_subgroup.wgsl`): one packet
@@ -173,16 +173,14 @@ impl Kernel {
         Kernel::new_packet_with(device, true)
     }
 
-    /// [`Kernel::new_packet`], with shadow rays in packets or each on its own
-    /// (`PACKET_SHADOWS`, set at pipeline creation; the same image either way). See
-    /// [`super::packet_shadows_pay`] for which to choose.
+    /// [`Kernel::new_packet`], with shadow rays in packets or each on its own (the shader
+    /// module made with or without `trace_subgroup_shadows.wgsl`; the same image either
+    /// way). See [`super::packet_shadows_pay`] for which to choose.
     pub fn new_packet_with(
         device: &wgpu::Device,
         shadows_in_packets: bool,
     ) -> Result<Kernel, GpuError> {
-        let mut k = Kernel::with_flavour(device, false, true)?;
-        k.packet_shadows = shadows_in_packets;
-        Ok(k)
+        Kernel::with_flavour(device, false, true, shadows_in_packets)
     }
 
     /// Whether this kernel traverses in packets (one per subgroup).
@@ -210,7 +208,7 @@ impl Kernel {
     /// buffers, the triangles traced through the driver's acceleration structure. The
     /// device must have `Features::EXPERIMENTAL_RAY_QUERY`.
     pub fn new_ray_query(device: &wgpu::Device) -> Result<Kernel, GpuError> {
-        Kernel::with_flavour(device, true, false)
+        Kernel::with_flavour(device, true, false, false)
     }
 
     /// Whether this is the ray-query kernel.
@@ -222,6 +220,7 @@ impl Kernel {
         device: &wgpu::Device,
         ray_query: bool,
         packet: bool,
+        packet_shadows: bool,
     ) -> Result<Kernel, GpuError> {
         scoped(device, "shader compilation", || {
             let (label, source) = if ray_query {
@@ -229,7 +228,7 @@ impl Kernel {
             } else if packet {
                 (
                     "trace_subgroup.wgsl",
-                    super::subgroup::shader_source().into(),
+                    super::subgroup::shader_source(packet_shadows).into(),
                 )
             } else {
                 ("trace.wgsl", SHADER_SOURCE.into())
@@ -284,7 +283,7 @@ impl Kernel {
             Kernel {
                 ray_query,
                 packet,
-                packet_shadows: packet,
+                packet_shadows: packet && packet_shadows,
                 render_pipeline_layout: pl(&render_layout),
                 rgba8_pipeline_layout: pl(&rgba8_layout),
                 query_pipeline_layout: pl(&query_layout),
@@ -313,11 +312,7 @@ impl Kernel {
             return Ok((p.clone(), Duration::ZERO));
         }
         let t0 = Instant::now();
-        let mut constants = spec.constants().to_vec();
-        if self.packet {
-            let on = if self.packet_shadows { 1.0 } else { 0.0 };
-            constants.push(("PACKET_SHADOWS", on));
-        }
+        let constants = spec.constants();
         let p = scoped(device, "pipeline creation", || {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("trace"),
