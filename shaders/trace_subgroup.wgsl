@@ -54,6 +54,22 @@ fn fetch_triangle(k: u32, r: u32) -> Triangle {
     );
 }
 
+/// `hit_prim` for the subgroup: primitive `id`'s (t, u, v), t = INFINITY on a miss, its
+/// triangle fetched cooperatively (`fetch_triangle`). `id` must be the same in every lane,
+/// and every lane of 0..7 active.
+fn hit_prim_packet(ray: Ray, sh: Shear, id: u32, r: u32, t_min: f32, t_max: f32) -> vec3<f32> {
+    var h = vec3<f32>(INFINITY, 0.0, 0.0);
+    if (id & TRIANGLE_BIT) != 0u {
+        if HAS_TRIANGLES {
+            let tri = fetch_triangle(id & ~TRIANGLE_BIT, r);
+            h = hit_triangle(ray, sh, tri, t_min, t_max);
+        }
+    } else if HAS_SPHERES {
+        h = vec3<f32>(hit_sphere(ray, spheres[id], t_min, t_max), 0.0, 0.0);
+    }
+    return h;
+}
+
 /// The number of lanes whose `b` is true.
 fn votes(b: bool) -> u32 {
     let v = subgroupBallot(b);
@@ -128,15 +144,7 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
         } else {
             for (var k = node.first; k < node.first + count; k = k + 1u) {
                 let id = prim_ids[k];
-                var h = vec3<f32>(INFINITY, 0.0, 0.0);
-                if (id & TRIANGLE_BIT) != 0u {
-                    if HAS_TRIANGLES {
-                        let tri = fetch_triangle(id & ~TRIANGLE_BIT, r);
-                        h = hit_triangle(ray, sh, tri, t_min, tie_bound(best));
-                    }
-                } else if HAS_SPHERES {
-                    h = vec3<f32>(hit_sphere(ray, spheres[id], t_min, tie_bound(best)), 0.0, 0.0);
-                }
+                let h = hit_prim_packet(ray, sh, id, r, t_min, tie_bound(best));
                 if live && nearer(h.x, id, best) {
                     best = Hit(h.x, id, h.y, h.z);
                 }

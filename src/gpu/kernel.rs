@@ -57,9 +57,7 @@ const RGBA8_BINDING: u32 = 14;
 
 /// The shader module with its layouts and a cache of specialised pipelines.
 pub struct Kernel {
-    ray_query: bool,
-    packet: bool,
-    packet_shadows: bool,
+    flavour: Flavour,
     module: wgpu::ShaderModule,
     render_layout: wgpu::BindGroupLayout,
     rgba8_layout: wgpu::BindGroupLayout,
@@ -138,6 +136,18 @@ pub fn tile_rows(device: &wgpu::Device, width: u32, height: u32) -> u32 {
     by_pixels.min(by_dispatch).min(height as u64) as u32
 }
 
+/// Which traversal a kernel's module holds.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Flavour {
+    /// `trace.wgsl`: one ray per invocation.
+    PerRay,
+    /// `trace_subgroup.wgsl`: one packet per subgroup, shadow rays in packets too
+    /// (`trace_subgroup_shadows.wgsl`) or each on its own.
+    Packet { shadows: bool },
+    /// `trace_rq.wgsl`: the driver's acceleration structure.
+    RayQuery,
+}
+
 /// The scene a render reads: kept as it is, or freed of its geometry once uploaded.
 enum Source<'a> {
     Kept(&'a SceneBuffers),
@@ -163,7 +173,7 @@ impl Source<'_> {
 impl Kernel {
     /// Compiles the shader module on `device` (pipelines are made on first use).
     pub fn new(device: &wgpu::Device) -> Result<Kernel, GpuError> {
-        Kernel::with_flavour(device, false, false, false)
+        Kernel::with_flavour(device, Flavour::PerRay)
     }
 
     /// The compute tracer with packet traversal (`shaders/trace_subgroup.wgsl`): one packet
@@ -180,27 +190,32 @@ impl Kernel {
         device: &wgpu::Device,
         shadows_in_packets: bool,
     ) -> Result<Kernel, GpuError> {
-        Kernel::with_flavour(device, false, true, shadows_in_packets)
+        Kernel::with_flavour(
+            device,
+            Flavour::Packet {
+                shadows: shadows_in_packets,
+            },
+        )
     }
 
     /// Whether this kernel traverses in packets (one per subgroup).
     pub fn is_packet(&self) -> bool {
-        self.packet
+        matches!(self.flavour, Flavour::Packet { .. })
     }
 
     /// Whether this kernel traces shadow rays in packets too (a packet kernel made so).
     pub fn shadows_in_packets(&self) -> bool {
-        self.packet && self.packet_shadows
+        self.flavour == Flavour::Packet { shadows: true }
     }
 
     /// The traversal, as bench rows and `glint render` name it: "packet", "packet, shadow
     /// rays per ray", "per-ray", or "ray query".
     pub fn traversal_name(&self) -> &'static str {
-        match (self.ray_query, self.packet, self.packet_shadows) {
-            (true, _, _) => "ray query",
-            (false, true, true) => "packet",
-            (false, true, false) => "packet, shadow rays per ray",
-            (false, false, _) => "per-ray",
+        match self.flavour {
+            Flavour::RayQuery => "ray query",
+            Flavour::Packet { shadows: true } => "packet",
+            Flavour::Packet { shadows: false } => "packet, shadow rays per ray",
+            Flavour::PerRay => "per-ray",
         }
     }
 
@@ -208,30 +223,23 @@ impl Kernel {
     /// buffers, the triangles traced through the driver's acceleration structure. The
     /// device must have `Features::EXPERIMENTAL_RAY_QUERY`.
     pub fn new_ray_query(device: &wgpu::Device) -> Result<Kernel, GpuError> {
-        Kernel::with_flavour(device, true, false, false)
+        Kernel::with_flavour(device, Flavour::RayQuery)
     }
 
     /// Whether this is the ray-query kernel.
     pub fn is_ray_query(&self) -> bool {
-        self.ray_query
+        self.flavour == Flavour::RayQuery
     }
 
-    fn with_flavour(
-        device: &wgpu::Device,
-        ray_query: bool,
-        packet: bool,
-        packet_shadows: bool,
-    ) -> Result<Kernel, GpuError> {
+    fn with_flavour(device: &wgpu::Device, flavour: Flavour) -> Result<Kernel, GpuError> {
         scoped(device, "shader compilation", || {
-            let (label, source) = if ray_query {
-                ("trace_rq.wgsl", super::rq::shader_source().into())
-            } else if packet {
-                (
+            let (label, source) = match flavour {
+                Flavour::RayQuery => ("trace_rq.wgsl", super::rq::shader_source().into()),
+                Flavour::Packet { shadows } => (
                     "trace_subgroup.wgsl",
-                    super::subgroup::shader_source(packet_shadows).into(),
-                )
-            } else {
-                ("trace.wgsl", SHADER_SOURCE.into())
+                    super::subgroup::shader_source(shadows).into(),
+                ),
+                Flavour::PerRay => ("trace.wgsl", SHADER_SOURCE.into()),
             };
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some(label),
@@ -242,7 +250,7 @@ impl Kernel {
             let mut query = scene_entries();
             query.push(storage_entry(6, true));
             query.push(storage_entry(7, false));
-            if ray_query {
+            if flavour == Flavour::RayQuery {
                 let accel = wgpu::BindGroupLayoutEntry {
                     binding: super::rq::ACCEL_BINDING,
                     visibility: wgpu::ShaderStages::COMPUTE,
@@ -254,7 +262,7 @@ impl Kernel {
                 render.push(accel);
                 query.push(accel);
             }
-            if packet {
+            if matches!(flavour, Flavour::Packet { .. }) {
                 for b in [
                     super::subgroup::NODE_WORDS_BINDING,
                     super::subgroup::TRIANGLE_WORDS_BINDING,
@@ -281,9 +289,7 @@ impl Kernel {
                 })
             };
             Kernel {
-                ray_query,
-                packet,
-                packet_shadows: packet && packet_shadows,
+                flavour,
                 render_pipeline_layout: pl(&render_layout),
                 rgba8_pipeline_layout: pl(&rgba8_layout),
                 query_pipeline_layout: pl(&query_layout),
@@ -381,7 +387,7 @@ impl Kernel {
                 resource: wgpu::BindingResource::AccelerationStructure(&a.tlas),
             });
         }
-        if self.packet {
+        if self.is_packet() {
             entries.push(wgpu::BindGroupEntry {
                 binding: super::subgroup::NODE_WORDS_BINDING,
                 resource: scene[5].as_entire_binding(),
@@ -402,7 +408,7 @@ impl Kernel {
         queue: &wgpu::Queue,
         buf: &SceneBuffers,
     ) -> Result<Option<super::rq::Accel>, GpuError> {
-        if !self.ray_query {
+        if !self.is_ray_query() {
             return Ok(None);
         }
         super::rq::build(device, queue, &buf.triangles).map(Some)

@@ -551,14 +551,15 @@ pub(super) fn leaf_triangle<'a>(g: &'a Globals<'a, f32>, id: u32, k: u32) -> Opt
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::common::{LANES, Lanes, PerLane, Shared};
     use super::*;
     use crate::cpu::prims::hit_sphere;
     use crate::kernel::real::V3;
 
-    /// A small deterministic generator (xorshift64*), uniform in [0, 1).
-    struct Rng(u64);
+    /// A small deterministic generator (xorshift64*), uniform in [0, 1); the packet
+    /// tests' (`trace.rs` uses it too).
+    pub(in crate::cpu::packet) struct Rng(pub(in crate::cpu::packet) u64);
     impl Rng {
         fn next(&mut self) -> f32 {
             self.0 ^= self.0 >> 12;
@@ -566,7 +567,7 @@ mod tests {
             self.0 ^= self.0 >> 27;
             (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
         }
-        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        pub(in crate::cpu::packet) fn range(&mut self, lo: f32, hi: f32) -> f32 {
             lo + (hi - lo) * self.next()
         }
     }

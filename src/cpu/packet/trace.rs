@@ -47,25 +47,9 @@ pub(super) fn box_lanes<O: Origins>(
         for l in 0..LANES {
             let n = r.origin.rel(&near_p, l);
             let f = r.origin.rel(&far_p, l);
-            let nx = n[0] * r.ix[l];
-            let ny = n[1] * r.iy[l];
-            let nz = n[2] * r.iz[l];
-            let mut fx = f[0] * r.ix[l];
-            let mut fy = f[1] * r.iy[l];
-            let mut fz = f[2] * r.iz[l];
-            fx = fx + fx.abs() * BOX_SLACK;
-            fy = fy + fy.abs() * BOX_SLACK;
-            fz = fz + fz.abs() * BOX_SLACK;
-            let mut t0 = t_min;
-            let mut t1 = bound[l];
-            t0 = if nx > t0 { nx } else { t0 };
-            t0 = if ny > t0 { ny } else { t0 };
-            t0 = if nz > t0 { nz } else { t0 };
-            t1 = if fx < t1 { fx } else { t1 };
-            t1 = if fy < t1 { fy } else { t1 };
-            t1 = if fz < t1 { fz } else { t1 };
-            near_out[l] = t0;
-            hit[l] = t0 <= t1;
+            let near = [n[0] * r.ix[l], n[1] * r.iy[l], n[2] * r.iz[l]];
+            let far = [f[0] * r.ix[l], f[1] * r.iy[l], f[2] * r.iz[l]];
+            (near_out[l], hit[l]) = clip_interval(near, far, t_min, bound[l]);
         }
         return mask_of(&hit);
     }
@@ -82,24 +66,31 @@ pub(super) fn box_lanes<O: Origins>(
         let nx = if sx { hx } else { lx };
         let ny = if sy { hy } else { ly };
         let nz = if sz { hz } else { lz };
-        let mut fx = if sx { lx } else { hx };
-        let mut fy = if sy { ly } else { hy };
-        let mut fz = if sz { lz } else { hz };
-        fx = fx + fx.abs() * BOX_SLACK;
-        fy = fy + fy.abs() * BOX_SLACK;
-        fz = fz + fz.abs() * BOX_SLACK;
-        let mut t0 = t_min;
-        let mut t1 = bound[l];
-        t0 = if nx > t0 { nx } else { t0 };
-        t0 = if ny > t0 { ny } else { t0 };
-        t0 = if nz > t0 { nz } else { t0 };
-        t1 = if fx < t1 { fx } else { t1 };
-        t1 = if fy < t1 { fy } else { t1 };
-        t1 = if fz < t1 { fz } else { t1 };
-        near_out[l] = t0;
-        hit[l] = t0 <= t1;
+        let fx = if sx { lx } else { hx };
+        let fy = if sy { ly } else { hy };
+        let fz = if sz { lz } else { hz };
+        (near_out[l], hit[l]) = clip_interval([nx, ny, nz], [fx, fy, fz], t_min, bound[l]);
     }
     mask_of(&hit)
+}
+
+/// The end of `box_interval` for one lane, from its slabs' near and far distances: each
+/// far distance widened by `BOX_SLACK` of itself, then (t_min, bound) clipped to the
+/// slabs. Returns the entry distance and whether the box is hit (t0 <= t1).
+#[inline(always)]
+fn clip_interval(near: [f32; 3], far: [f32; 3], t_min: f32, bound: f32) -> (f32, bool) {
+    let fx = far[0] + far[0].abs() * BOX_SLACK;
+    let fy = far[1] + far[1].abs() * BOX_SLACK;
+    let fz = far[2] + far[2].abs() * BOX_SLACK;
+    let mut t0 = t_min;
+    let mut t1 = bound;
+    t0 = if near[0] > t0 { near[0] } else { t0 };
+    t0 = if near[1] > t0 { near[1] } else { t0 };
+    t0 = if near[2] > t0 { near[2] } else { t0 };
+    t1 = if fx < t1 { fx } else { t1 };
+    t1 = if fy < t1 { fy } else { t1 };
+    t1 = if fz < t1 { fz } else { t1 };
+    (t0, t0 <= t1)
 }
 
 /// Asks the cache for what a step at `node` will read next: its far child's box (the
@@ -866,21 +857,8 @@ pub(super) fn phong_power_lanes(
 
 #[cfg(test)]
 mod tests {
+    use super::super::prims::tests::Rng;
     use super::*;
-
-    /// xorshift64*, uniform in [0, 1).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f32 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * self.next()
-        }
-    }
 
     /// `box_lanes` on a uniform-sign packet, then on the same packet sent down the compare.
     fn check<O: Origins>(
