@@ -427,6 +427,7 @@ pub(super) fn occluded_lanes(
 pub fn closest_hit_packet(
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
+    dir: &[[f32; LANES]; 3],
     active: Mask,
     t_min: f32,
     t_max: f32,
@@ -446,14 +447,8 @@ pub fn closest_hit_packet(
     }
     let best = &mut out.hits;
     let slots = &mut out.slots;
-    let mut dir = [[0.0f32; LANES]; 3];
-    for l in 0..LANES {
-        dir[0][l] = rays[l].dir.x;
-        dir[1][l] = rays[l].dir.y;
-        dir[2][l] = rays[l].dir.z;
-    }
-    let r = Lanes::new(Shared(rays[0].origin), &dir);
-    let sh = shear_lanes(&dir, g.spec.triangle_algo == TRIANGLE_WATERTIGHT);
+    let r = Lanes::new(Shared(rays[0].origin), dir);
+    let sh = shear_lanes(dir, g.spec.triangle_algo == TRIANGLE_WATERTIGHT);
     if !g.spec.use_bvh {
         closest_hit_all_lanes(g, rays, &r, &sh, active, t_min, best);
         return out;
@@ -535,7 +530,8 @@ pub fn closest_hit_packet(
 
 /// `camera_ray` through the point (dx, dy) of each pixel of the block at (i, j), lane by
 /// lane with the same operations in the same order, written as lane loops so that they
-/// vectorise; and the lanes whose pixel lies inside the image.
+/// vectorise; the same directions as lane arrays; and the lanes whose pixel lies inside
+/// the image.
 #[inline(always)]
 pub fn camera_rays(
     g: &Globals<f32>,
@@ -543,7 +539,7 @@ pub fn camera_rays(
     j: u32,
     dx: f32,
     dy: f32,
-) -> ([Ray<f32>; LANES], Mask) {
+) -> ([Ray<f32>; LANES], [[f32; LANES]; 3], Mask) {
     let c = &g.cam;
     let two = 1.0f32 + 1.0;
     let mut active: Mask = 0;
@@ -575,7 +571,7 @@ pub fn camera_rays(
     for l in 0..LANES {
         rays[l].dir = V3::new(n[0][l], n[1][l], n[2][l]);
     }
-    (rays, active)
+    (rays, n, active)
 }
 
 /// `trace_pixel` for the block: one packet per sample position, each packet the block's
@@ -622,14 +618,14 @@ pub(super) fn sample_packet(
     dx: f32,
     dy: f32,
 ) -> [[f32; 4]; LANES] {
-    let (rays, active) = camera_rays(g, i, j, dx, dy);
-    let found = closest_hit_packet(g, &rays, active, 0.0, f32::MAX);
+    let (rays, dir, active) = camera_rays(g, i, j, dx, dy);
+    let found = closest_hit_packet(g, &rays, &dir, active, 0.0, f32::MAX);
     let hits = &found.hits;
     let mut lit: Mask = 0;
     for l in 0..LANES {
         lit |= ((hits[l].prim != PRIM_NONE) as Mask) << l;
     }
-    let colors = shade_lanes(g, &rays, &found, lit & active);
+    let colors = shade_lanes(g, &dir, &found, lit & active);
     // Loops, not `array::from_fn`: that is a generic function of its own, compiled once
     // for the baseline instruction set and called from every build.
     let bg = g.buf.params.background;
@@ -645,12 +641,14 @@ pub(super) fn sample_packet(
 /// `shade` for the lanes in `mask`, which must all hit something: the same operations in
 /// the same order, lane by lane, with the square roots, divisions and the exponent's
 /// squarings as lane loops. Shadow rays and non-integer exponents go lane by lane
-/// through the mirror's own `occluded` and `phong_power`. Lanes outside `mask` compute
-/// lane `mask`'s first lane's values, which are not used.
+/// through the mirror's own `occluded` and `phong_power`. `dir` holds the rays'
+/// directions as lane arrays. Lanes outside `mask` compute values that are not used: the
+/// point on their own ray (far off or infinite for a miss), the material and normal of
+/// the primitive of lane `mask`'s first lane.
 #[inline(always)]
 pub(super) fn shade_lanes(
     g: &Globals<f32>,
-    rays: &[Ray<f32>; LANES],
+    dir: &[[f32; LANES]; 3],
     found: &PacketHits,
     mask: Mask,
 ) -> [[f32; LANES]; 3] {
@@ -669,47 +667,91 @@ pub(super) fn shade_lanes(
         }
         &g.buf.triangles[(hits[l].prim & !TRIANGLE_BIT) as usize]
     };
+    // One primitive under every lane (a large triangle or sphere in view, the common
+    // case): its material, and a triangle's normal, are found once and copied to every
+    // lane, the values the lane loops would have found lane by lane. Copied lane by lane
+    // (16 scalar stores read back as vectors) they were a third of the 2-triangle frame.
+    let prim0 = hits[first].prim;
+    let mut one_prim = true;
+    for l in 0..LANES {
+        one_prim &= hits[src(l)].prim == prim0;
+    }
+    let mut material = [0u32; LANES];
+    if one_prim {
+        material = [prim_material(g, &hits[first], || tri_of(first)); LANES];
+    } else {
+        for l in 0..LANES {
+            material[l] = prim_material(g, &hits[src(l)], || tri_of(src(l)));
+        }
+    }
     // A loop, not `array::from_fn`: that was left a call of its own (5 % of the frame).
     // The terms are copied into lane arrays here, the one gather a lane, so that the lane
-    // loops below read them in step and vectorise (through `mats[l]` each was a gather).
+    // loops below read them in step and vectorise (through `mats[l]` each was a gather);
+    // splatted where every lane has the same material.
     let mut mats: [&Material; LANES] = [&g.buf.materials[0]; LANES];
     let mut ka = [[0.0f32; LANES]; 3];
     let mut kd = [[0.0f32; LANES]; 3];
     let mut ks = [[0.0f32; LANES]; 3];
     let mut model = [0u32; LANES];
-    for l in 0..LANES {
-        let material = prim_material(g, &hits[src(l)], || tri_of(src(l)));
-        let m = &g.buf.materials[material as usize];
-        mats[l] = m;
+    if material.iter().all(|&m| m == material[0]) {
+        let m = &g.buf.materials[material[0] as usize];
+        mats = [m; LANES];
         for c in 0..3 {
-            ka[c][l] = m.ka[c];
-            kd[c][l] = m.kd[c];
-            ks[c][l] = m.ks[c];
+            ka[c] = [m.ka[c]; LANES];
+            kd[c] = [m.kd[c]; LANES];
+            ks[c] = [m.ks[c]; LANES];
         }
-        model[l] = m.model;
+        model = [m.model; LANES];
+    } else {
+        for l in 0..LANES {
+            let m = &g.buf.materials[material[l] as usize];
+            mats[l] = m;
+            for c in 0..3 {
+                ka[c][l] = m.ka[c];
+                kd[c][l] = m.kd[c];
+                ks[c][l] = m.ks[c];
+            }
+            model[l] = m.model;
+        }
     }
     let o = g.cam.eye;
+    // Each lane's own direction and t (a miss's point is far off or infinite: not used).
     let mut p = [[0.0f32; LANES]; 3];
     let mut nv = [[0.0f32; LANES]; 3];
-    let mut dir = [[0.0f32; LANES]; 3];
     for l in 0..LANES {
-        let (ray, hit) = (&rays[src(l)], &hits[src(l)]);
-        dir[0][l] = ray.dir.x;
-        dir[1][l] = ray.dir.y;
-        dir[2][l] = ray.dir.z;
-        p[0][l] = o.x + ray.dir.x * hit.t;
-        p[1][l] = o.y + ray.dir.y * hit.t;
-        p[2][l] = o.z + ray.dir.z * hit.t;
-        let v = prim_normal(g, hit, [p[0][l], p[1][l], p[2][l]], || tri_of(src(l)));
-        nv[0][l] = v[0];
-        nv[1][l] = v[1];
-        nv[2][l] = v[2];
+        let t = hits[l].t;
+        p[0][l] = o.x + dir[0][l] * t;
+        p[1][l] = o.y + dir[1][l] * t;
+        p[2][l] = o.z + dir[2][l] * t;
+    }
+    if one_prim && (prim0 & TRIANGLE_BIT) != 0 {
+        // `prim_normal` of a triangle does not depend on the point.
+        let v = prim_normal(g, &hits[first], [0.0; 3], || tri_of(first));
+        for k in 0..3 {
+            nv[k] = [v[k]; LANES];
+        }
+    } else if one_prim {
+        // `prim_normal` of a sphere: the point less the centre, as a lane loop.
+        let c = g.buf.spheres[prim0 as usize].center;
+        for l in 0..LANES {
+            for k in 0..3 {
+                nv[k][l] = p[k][l] - c[k];
+            }
+        }
+    } else {
+        for l in 0..LANES {
+            let hit = &hits[src(l)];
+            let v = prim_normal(g, hit, [p[0][l], p[1][l], p[2][l]], || tri_of(src(l)));
+            nv[0][l] = v[0];
+            nv[1][l] = v[1];
+            nv[2][l] = v[2];
+        }
     }
     let mut n = normalize_lanes(&nv);
     let ambient = g.buf.params.ambient;
     let mut diffuse_flags = [false; LANES];
     for l in 0..LANES {
-        if dot_lane(&n, &dir, l) > 0.0 {
+        if dot_lane(&n, dir, l) > 0.0 {
             n[0][l] = -n[0][l];
             n[1][l] = -n[1][l];
             n[2][l] = -n[2][l];
