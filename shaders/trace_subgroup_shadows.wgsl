@@ -25,7 +25,8 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
     if params.n_nodes == 0u {
         return false;
     }
-    let root = box_interval(fetch_node(0u, r), ray.origin, inv_dir, t_min, t_max);
+    var node = fetch_node(0u, r);
+    let root = box_interval(node, ray.origin, inv_dir, t_min, t_max);
     var live = root.x <= root.y;
     if !subgroupAny(live) {
         return false;
@@ -36,11 +37,12 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
     var sp = 0u;
     var at = 0u;
     for (var step = 0u; step < params.n_nodes; step = step + 1u) {
-        let node = fetch_node(at, r);
         let count = node.count_axis >> 2u;
         if count == 0u {
-            let left = box_interval(fetch_node(at + 1u, r), ray.origin, inv_dir, t_min, t_max);
-            let right = box_interval(fetch_node(node.first, r), ray.origin, inv_dir, t_min, t_max);
+            let left_node = fetch_node(at + 1u, r);
+            let right_node = fetch_node(node.first, r);
+            let left = box_interval(left_node, ray.origin, inv_dir, t_min, t_max);
+            let right = box_interval(right_node, ray.origin, inv_dir, t_min, t_max);
             let hit_left = live && !blocked && left.x <= left.y;
             let hit_right = live && !blocked && right.x <= right.y;
             let any_left = subgroupAny(hit_left);
@@ -51,10 +53,12 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
                 if d < 0.0 {
                     stack[sp] = (at + 1u) | select(0u, 0x80000000u, hit_left);
                     at = node.first;
+                    node = right_node;
                     live = hit_right;
                 } else {
                     stack[sp] = node.first | select(0u, 0x80000000u, hit_right);
                     at = at + 1u;
+                    node = left_node;
                     live = hit_left;
                 }
                 sp = sp + 1u;
@@ -62,11 +66,13 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
             }
             if any_left {
                 at = at + 1u;
+                node = left_node;
                 live = hit_left;
                 continue;
             }
             if any_right {
                 at = node.first;
+                node = right_node;
                 live = hit_right;
                 continue;
             }
@@ -88,6 +94,7 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
         sp = sp - 1u;
         let e = stack[sp];
         at = e & 0x7fffffffu;
+        node = fetch_node(at, r);
         live = (e >> 31u) != 0u;
     }
     return blocked;
