@@ -560,15 +560,9 @@ fn run(cli: Cli) -> Result<()> {
                             format!(
                                 "{}: {} (device {:.0} ms, compile {:.0} ms,{} trace {:.1} ms, readback {:.1} ms)",
                                 if rq {
-                                    "gpu-rq"
-                                } else if kernel.is_packet() {
-                                    if kernel.shadows_in_packets() {
-                                        "gpu (packet traversal)"
-                                    } else {
-                                        "gpu (packet traversal, shadow rays per ray)"
-                                    }
+                                    "gpu-rq".to_string()
                                 } else {
-                                    "gpu (per-ray traversal)"
+                                    format!("gpu (traversal: {})", kernel.traversal_name())
                                 },
                                 gpu.describe(),
                                 gpu.start_time.as_secs_f64() * 1e3,

@@ -203,11 +203,6 @@ impl Kernel {
         matches!(self.flavour, Flavour::Packet { .. })
     }
 
-    /// Whether this kernel traces shadow rays in packets too (a packet kernel made so).
-    pub fn shadows_in_packets(&self) -> bool {
-        self.flavour == Flavour::Packet { shadows: true }
-    }
-
     /// The traversal, as bench rows and `glint render` name it: "packet", "packet, shadow
     /// rays per ray", "per-ray", or "ray query".
     pub fn traversal_name(&self) -> &'static str {
