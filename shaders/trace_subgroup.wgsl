@@ -73,12 +73,6 @@ fn hit_prim_packet(ray: Ray, sh: Shear, id: u32, r: u32, t_min: f32, t_max: f32)
     return h;
 }
 
-/// The number of lanes whose `b` is true.
-fn votes(b: bool) -> u32 {
-    let v = subgroupBallot(b);
-    return countOneBits(v.x) + countOneBits(v.y) + countOneBits(v.z) + countOneBits(v.w);
-}
-
 /// `closest_hit_bvh` for the subgroup as one packet (see the top of this file). Falls
 /// back to the per-ray traversal when lanes 0..7 are not all active (the edge of a tile,
 /// the last rays of a query, a subgroup narrower than 8).
@@ -112,8 +106,21 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
             let right = box_interval(right_node, ray.origin, inv_dir, t_min, bound);
             let hit_left = live && left.x <= left.y;
             let hit_right = live && right.x <= right.y;
-            let any_left = subgroupAny(hit_left);
-            let any_right = subgroupAny(hit_right);
+            // Every vote of the step in one reduction: the lanes entering the left child,
+            // the right, both with the right nearer, both with the left not farther, one
+            // byte each (a count is at most the subgroup's width: 8 on lavapipe, at most
+            // wgpu's MAXIMUM_SUBGROUP_MAX_SIZE, 128, anywhere; `src/gpu/subgroup.rs`
+            // checks it). On lavapipe each vote or ballot is a loop over the lanes; two
+            // `subgroupAny` and two ballots were four.
+            let both = hit_left && hit_right;
+            let right_nearer = right.x < left.x;
+            let counts = subgroupAdd(
+                select(0u, 1u, hit_left) | select(0u, 0x100u, hit_right)
+                    | select(0u, 0x10000u, both && right_nearer)
+                    | select(0u, 0x1000000u, both && !right_nearer),
+            );
+            let any_left = (counts & 0xffu) != 0u;
+            let any_right = (counts & 0xff00u) != 0u;
             if any_left && any_right {
                 // The nearer child by a vote of the lanes that enter both, each by its own
                 // entry distances, as `closest_hit_bvh_ray` orders them. Not by the split
@@ -122,8 +129,7 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
                 // naive test far from the origin, rays with non-finite parts), the order
                 // decides which hit the bound culls, and 4 of 100000 query rays differed
                 // from the mirror. A lane alone in both children gets its own order.
-                let both = hit_left && hit_right;
-                let right_first = votes(both && right.x < left.x) > votes(both && !(right.x < left.x));
+                let right_first = ((counts >> 16u) & 0xffu) > (counts >> 24u);
                 if right_first {
                     stack[sp] = (at + 1u) | select(0u, 0x80000000u, hit_left);
                     at = node.first;

@@ -45,8 +45,10 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
             let right = box_interval(right_node, ray.origin, inv_dir, t_min, t_max);
             let hit_left = live && !blocked && left.x <= left.y;
             let hit_right = live && !blocked && right.x <= right.y;
-            let any_left = subgroupAny(hit_left);
-            let any_right = subgroupAny(hit_right);
+            // Both votes in one reduction (on lavapipe each vote is a loop over the lanes).
+            let any = subgroupOr(select(0u, 1u, hit_left) | select(0u, 2u, hit_right));
+            let any_left = (any & 1u) != 0u;
+            let any_right = (any & 2u) != 0u;
             if any_left && any_right {
                 let axis = node.count_axis & 3u;
                 let d = select(select(dir0.x, dir0.y, axis == 1u), dir0.z, axis == 2u);

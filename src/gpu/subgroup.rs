@@ -8,6 +8,12 @@ pub const SUBGROUP_SOURCE: &str = include_str!("../../shaders/trace_subgroup.wgs
 /// Its shadow rays' part (`occluded_bvh`), added where shadow rays go in packets.
 pub const SUBGROUP_SHADOWS_SOURCE: &str = include_str!("../../shaders/trace_subgroup_shadows.wgsl");
 
+// `trace_subgroup.wgsl` counts a step's votes in one `subgroupAdd`, a byte each.
+const _: () = assert!(
+    wgpu::MAXIMUM_SUBGROUP_MAX_SIZE < 256,
+    "a subgroup's vote count must fit in a byte"
+);
+
 /// The binding of the BVH nodes seen as dwords.
 pub const NODE_WORDS_BINDING: u32 = 12;
 /// The binding of the triangles seen as dwords.
