@@ -16,7 +16,9 @@
 // vector shuffle). The child the packet enters is the node fetched for its box test,
 // carried into the next step; only a node popped from the stack is fetched again (one
 // fetch a descent less: lavapipe 25, peers 1M 0.70 with shadows, 0.80 without; level on
-// 22.3, which runs the pop's fetch masked either way). Each lane keeps a `live` flag, pushed with every stack entry: it tests
+// 22.3, which runs the pop's fetch masked either way). Each packet loop is a descent loop
+// inside a leaf loop, so that lavapipe 22.3, which runs both sides of every `if`, does not
+// run a leaf's triangle tests, masked, on every descent step. Each lane keeps a `live` flag, pushed with every stack entry: it tests
 // a box or accepts a hit only where its own traversal would have gone (the CPU packet
 // tracer's masks). The nearest hit is the smallest t, then the lowest id; a lane's answer
 // is `closest_hit_bvh_ray`'s, bit for bit, wherever every primitive's computed hit lies in
@@ -96,9 +98,19 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
     var at = 0u;
-    for (var step = 0u; step < params.n_nodes; step = step + 1u) {
-        let count = node.count_axis >> 2u;
-        if count == 0u {
+    // Two loops: the inner one descends through interior nodes (popping where the packet
+    // enters neither child) to the next leaf the packet enters, the outer one tests that
+    // leaf and pops. Lavapipe 22.3 runs both sides of every `if`, masked: in one loop with
+    // a branch for each kind of node, every descent step paid for the leaf's triangle
+    // tests too. Every step (a descent or a leaf) counts against `n_nodes`, as in one loop.
+    var step = 0u;
+    loop {
+        var at_leaf = false;
+        for (; step < params.n_nodes; step = step + 1u) {
+            if (node.count_axis >> 2u) != 0u {
+                at_leaf = true;
+                break;
+            }
             let bound = tie_bound(best);
             let left_node = fetch_node(at + 1u, r);
             let right_node = fetch_node(node.first, r);
@@ -156,16 +168,28 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
                 live = hit_right;
                 continue;
             }
-        } else {
-            for (var k = node.first; k < node.first + count; k = k + 1u) {
-                let id = prim_ids[k];
-                let h = hit_prim_packet(ray, sh, id, r, t_min, tie_bound(best));
-                if live && nearer(h.x, id, best) {
-                    best = Hit(h.x, id, h.y, h.z);
-                }
+            if sp == 0u {
+                break;
+            }
+            sp = sp - 1u;
+            let e = stack[sp];
+            at = e & 0x7fffffffu;
+            node = fetch_node(at, r);
+            live = (e >> 31u) != 0u;
+        }
+        if !at_leaf {
+            break;
+        }
+        let count = node.count_axis >> 2u;
+        for (var k = node.first; k < node.first + count; k = k + 1u) {
+            let id = prim_ids[k];
+            let h = hit_prim_packet(ray, sh, id, r, t_min, tie_bound(best));
+            if live && nearer(h.x, id, best) {
+                best = Hit(h.x, id, h.y, h.z);
             }
         }
-        if sp == 0u {
+        step = step + 1u;
+        if sp == 0u || step >= params.n_nodes {
             break;
         }
         sp = sp - 1u;

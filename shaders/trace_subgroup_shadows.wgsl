@@ -36,9 +36,15 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
     var stack: array<u32, BVH_STACK>;
     var sp = 0u;
     var at = 0u;
-    for (var step = 0u; step < params.n_nodes; step = step + 1u) {
-        let count = node.count_axis >> 2u;
-        if count == 0u {
+    // A descent loop inside a leaf loop, as `closest_hit_bvh`'s (see there).
+    var step = 0u;
+    loop {
+        var at_leaf = false;
+        for (; step < params.n_nodes; step = step + 1u) {
+            if (node.count_axis >> 2u) != 0u {
+                at_leaf = true;
+                break;
+            }
             let left_node = fetch_node(at + 1u, r);
             let right_node = fetch_node(node.first, r);
             let left = box_interval(left_node, ray.origin, inv_dir, t_min, t_max);
@@ -78,19 +84,31 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
                 live = hit_right;
                 continue;
             }
-        } else {
-            for (var k = node.first; k < node.first + count; k = k + 1u) {
-                let id = prim_ids[k];
-                let h = hit_prim_packet(ray, sh, id, r, t_min, t_max).x;
-                if live && id != skip && h < t_max {
-                    blocked = true;
-                }
+            if sp == 0u {
+                break;
             }
-            if !subgroupAny(!blocked) {
-                return true;
+            sp = sp - 1u;
+            let e = stack[sp];
+            at = e & 0x7fffffffu;
+            node = fetch_node(at, r);
+            live = (e >> 31u) != 0u;
+        }
+        if !at_leaf {
+            break;
+        }
+        let count = node.count_axis >> 2u;
+        for (var k = node.first; k < node.first + count; k = k + 1u) {
+            let id = prim_ids[k];
+            let h = hit_prim_packet(ray, sh, id, r, t_min, t_max).x;
+            if live && id != skip && h < t_max {
+                blocked = true;
             }
         }
-        if sp == 0u {
+        if !subgroupAny(!blocked) {
+            return true;
+        }
+        step = step + 1u;
+        if sp == 0u || step >= params.n_nodes {
             break;
         }
         sp = sp - 1u;
