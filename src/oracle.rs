@@ -142,10 +142,10 @@ pub fn hit_sphere(ray: &RayIn, s: &Sphere) -> Option<f64> {
 pub fn closest_hit(buf: &SceneBuffers, ray: &RayIn) -> Option<(f64, u32)> {
     let mut best: Option<(f64, u32)> = None;
     let mut consider = |t: Option<f64>, prim: u32| {
-        if let Some(t) = t {
-            if best.is_none_or(|(bt, _)| t < bt) {
-                best = Some((t, prim));
-            }
+        if let Some(t) = t
+            && best.is_none_or(|(bt, _)| t < bt)
+        {
+            best = Some((t, prim));
         }
     };
     for (k, s) in buf.spheres.iter().enumerate() {

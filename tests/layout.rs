@@ -18,14 +18,14 @@ fn wgsl_layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(module.to_ctx()).expect("layout");
     for (handle, ty) in module.types.iter() {
-        if ty.name.as_deref() == Some(name) {
-            if let naga::TypeInner::Struct { members, .. } = &ty.inner {
-                let fields = members
-                    .iter()
-                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
-                    .collect();
-                return (layouter[handle].size, fields);
-            }
+        if ty.name.as_deref() == Some(name)
+            && let naga::TypeInner::Struct { members, .. } = &ty.inner
+        {
+            let fields = members
+                .iter()
+                .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                .collect();
+            return (layouter[handle].size, fields);
         }
     }
     panic!("no WGSL struct {name}");

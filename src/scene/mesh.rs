@@ -188,34 +188,34 @@ pub(super) fn load(
             ],
         )
     });
-    if let (Some(name), Some(ckey)) = (&m.material, &cache_key) {
-        if let Some(entry) = crate::stages::time("cache read", || CachedMesh::load(ckey)) {
-            drop(raw);
-            let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
-            let material = v.material_index(&names, name, &format!("meshes[{i}].material"))?;
-            if let Some(first) = entry.first_short_face {
-                warnings.push(format!(
-                    "{}:{line}: {key}: {}: {}",
-                    v.path.display(),
-                    obj_path.display(),
-                    short_face_warning(entry.short_faces, first)
-                ));
-            }
-            if let Some(normals) = entry.normals {
-                smooth.push(SmoothNormals {
-                    first: triangles.len(),
-                    normals,
-                });
-            }
-            let before = triangles.len();
-            triangles.extend(
-                entry
-                    .vertices
-                    .into_iter()
-                    .map(|vertices| Triangle { vertices, material }),
-            );
-            return finish(v, line, &key, &triangles[before..], &fail, warnings);
+    if let (Some(name), Some(ckey)) = (&m.material, &cache_key)
+        && let Some(entry) = crate::stages::time("cache read", || CachedMesh::load(ckey))
+    {
+        drop(raw);
+        let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
+        let material = v.material_index(&names, name, &format!("meshes[{i}].material"))?;
+        if let Some(first) = entry.first_short_face {
+            warnings.push(format!(
+                "{}:{line}: {key}: {}: {}",
+                v.path.display(),
+                obj_path.display(),
+                short_face_warning(entry.short_faces, first)
+            ));
         }
+        if let Some(normals) = entry.normals {
+            smooth.push(SmoothNormals {
+                first: triangles.len(),
+                normals,
+            });
+        }
+        let before = triangles.len();
+        triangles.extend(
+            entry
+                .vertices
+                .into_iter()
+                .map(|vertices| Triangle { vertices, material }),
+        );
+        return finish(v, line, &key, &triangles[before..], &fail, warnings);
     }
     // A gzipped OBJ for glint's own reader is parsed as it is inflated (`gunzip_parse`);
     // where that does not apply (see there) it is gunzipped whole, then parsed.

@@ -153,6 +153,94 @@ pub(super) fn mask_of(flags: &[bool; LANES]) -> Mask {
     m
 }
 
+/// A build of the packet tracer (`Simd`), as a type: how it turns a lane-wise compare into
+/// a lane mask. The box test's mask, 60 a packet on the peers' 1M-triangle scene, went
+/// through `mask_of`: the compare's result, already a mask register in the AVX-512 build,
+/// was widened to sixteen bytes and multiplied back into bits. Every build gives the same
+/// mask (`<=` is false where either side is NaN, as `_CMP_LE_OQ` is).
+///
+/// Private to the packet tracer: [`Avx2`] and [`Avx512`] run the instructions of their
+/// names, so they are used only inside the functions compiled for those features, which
+/// `tracer` calls only where the CPU has them.
+pub(super) trait Build {
+    /// The lanes where `a[l] <= b[l]`.
+    fn le_mask(a: &[f32; LANES], b: &[f32; LANES]) -> Mask;
+}
+
+/// The baseline build: `mask_of`.
+pub(super) struct Portable;
+
+impl Build for Portable {
+    #[inline(always)]
+    fn le_mask(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
+        let mut f = [false; LANES];
+        for l in 0..LANES {
+            f[l] = a[l] <= b[l];
+        }
+        mask_of(&f)
+    }
+}
+
+/// The AVX2 build: two eight-lane compares and their sign bits (`movmskps`).
+#[cfg(target_arch = "x86_64")]
+pub(super) struct Avx2;
+
+#[cfg(target_arch = "x86_64")]
+impl Build for Avx2 {
+    #[inline(always)]
+    fn le_mask(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
+        // SAFETY: used only in `trace_packet_avx2` (see `Build`), run only where the CPU
+        // has AVX2.
+        unsafe { le_mask_avx2(a, b) }
+    }
+}
+
+/// [`Avx2::le_mask`], compiled for AVX2 (inlined into the AVX2 build).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn le_mask_avx2(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
+    use std::arch::x86_64::{_CMP_LE_OQ, _mm256_cmp_ps, _mm256_loadu_ps, _mm256_movemask_ps};
+    let mut m: Mask = 0;
+    for h in 0..LANES / 8 {
+        // SAFETY: each load reads eight of the sixteen floats of `a` or `b`.
+        let (x, y) = unsafe {
+            (
+                _mm256_loadu_ps(a.as_ptr().add(8 * h)),
+                _mm256_loadu_ps(b.as_ptr().add(8 * h)),
+            )
+        };
+        m |= (_mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(x, y)) as Mask) << (8 * h);
+    }
+    m
+}
+
+/// The AVX-512 build: one sixteen-lane compare into a mask register.
+#[cfg(target_arch = "x86_64")]
+pub(super) struct Avx512;
+
+#[cfg(target_arch = "x86_64")]
+impl Build for Avx512 {
+    #[inline(always)]
+    fn le_mask(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
+        // SAFETY: used only in `trace_packet_avx512` (see `Build`), run only where the CPU
+        // has AVX-512 F.
+        unsafe { le_mask_avx512(a, b) }
+    }
+}
+
+/// [`Avx512::le_mask`], compiled for AVX-512 F (inlined into the AVX-512 build).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[inline]
+fn le_mask_avx512(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
+    use std::arch::x86_64::{_CMP_LE_OQ, _mm512_cmp_ps_mask, _mm512_loadu_ps};
+    const _: () = assert!(LANES == 16, "one 16-lane vector");
+    // SAFETY: each load reads the sixteen floats of `a` or `b`.
+    let (x, y) = unsafe { (_mm512_loadu_ps(a.as_ptr()), _mm512_loadu_ps(b.as_ptr())) };
+    _mm512_cmp_ps_mask::<_CMP_LE_OQ>(x, y)
+}
+
 /// `a · b` of lane l, left to right as `V3::dot`.
 #[inline(always)]
 pub(super) fn dot_lane(a: &[[f32; LANES]; 3], b: &[[f32; LANES]; 3], l: usize) -> f32 {

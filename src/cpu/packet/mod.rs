@@ -34,9 +34,12 @@ mod prims;
 mod trace;
 
 pub use common::{LANES, Mask, PACKET_H, PACKET_W};
-pub use trace::{NO_SLOT, PacketHits, camera_rays, closest_hit_packet};
+pub use trace::{NO_SLOT, PacketHits};
 
 use crate::cpu::common::Globals;
+use common::Portable;
+#[cfg(target_arch = "x86_64")]
+use common::{Avx2, Avx512};
 use trace::trace_packet_body;
 
 /// Which build of the packet tracer runs. Every build gives the same image, bit for bit:
@@ -106,14 +109,14 @@ pub fn tracer(simd: Simd) -> PacketFn {
         "avx2" => return |g, i, j| unsafe { trace_packet_avx2(g, i, j) },
         _ => {}
     }
-    trace_packet_body
+    trace_packet_body::<Portable>
 }
 
 /// `trace_packet` compiled for AVX2: a lane loop is two eight-wide vectors.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn trace_packet_avx2(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
-    trace_packet_body(g, i, j)
+    trace_packet_body::<Avx2>(g, i, j)
 }
 
 /// `trace_packet` compiled for AVX-512: a lane loop is one sixteen-wide vector, and lane
@@ -121,5 +124,5 @@ unsafe fn trace_packet_avx2(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANE
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
 unsafe fn trace_packet_avx512(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
-    trace_packet_body(g, i, j)
+    trace_packet_body::<Avx512>(g, i, j)
 }

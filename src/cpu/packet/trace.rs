@@ -5,7 +5,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::common::{
-    LANES, Lanes, Mask, Origins, PACKET_W, PerLane, Shared, dot_lane, mask_of, normalize_lanes,
+    Build, LANES, Lanes, Mask, Origins, PACKET_W, PerLane, Shared, dot_lane, mask_of,
+    normalize_lanes,
 };
 use super::prims::{
     ShearLanes, leaf_triangle, prim_lanes, prim_material, prim_normal, shear_lanes, sphere_lanes,
@@ -33,14 +34,14 @@ use crate::kernel::real::V3;
 /// one, and where the two are equal they are the same bits (`box_picks_like_the_compare`).
 /// `node`'s box must have lo <= hi on every axis, as every box the builder makes has.
 #[inline(always)]
-pub(super) fn box_lanes<O: Origins>(
+pub(super) fn box_lanes<B: Build, O: Origins>(
     node: &BvhNode,
     r: &Lanes<O>,
     t_min: f32,
     bound: &[f32; LANES],
     near_out: &mut [f32; LANES],
 ) -> Mask {
-    let mut hit = [false; LANES];
+    let mut far_out = [0.0f32; LANES];
     if let Some(neg) = r.neg {
         let pick = |a: &[f32; 3], b: &[f32; 3]| [0, 1, 2].map(|k| if neg[k] { b[k] } else { a[k] });
         let (near_p, far_p) = (pick(&node.lo, &node.hi), pick(&node.hi, &node.lo));
@@ -49,9 +50,9 @@ pub(super) fn box_lanes<O: Origins>(
             let f = r.origin.rel(&far_p, l);
             let near = [n[0] * r.ix[l], n[1] * r.iy[l], n[2] * r.iz[l]];
             let far = [f[0] * r.ix[l], f[1] * r.iy[l], f[2] * r.iz[l]];
-            (near_out[l], hit[l]) = clip_interval(near, far, t_min, bound[l]);
+            (near_out[l], far_out[l]) = clip_interval(near, far, t_min, bound[l]);
         }
-        return mask_of(&hit);
+        return B::le_mask(near_out, &far_out);
     }
     for l in 0..LANES {
         let lo = r.origin.rel(&node.lo, l);
@@ -69,16 +70,17 @@ pub(super) fn box_lanes<O: Origins>(
         let fx = if sx { lx } else { hx };
         let fy = if sy { ly } else { hy };
         let fz = if sz { lz } else { hz };
-        (near_out[l], hit[l]) = clip_interval([nx, ny, nz], [fx, fy, fz], t_min, bound[l]);
+        (near_out[l], far_out[l]) = clip_interval([nx, ny, nz], [fx, fy, fz], t_min, bound[l]);
     }
-    mask_of(&hit)
+    B::le_mask(near_out, &far_out)
 }
 
 /// The end of `box_interval` for one lane, from its slabs' near and far distances: each
 /// far distance widened by `BOX_SLACK` of itself, then (t_min, bound) clipped to the
-/// slabs. Returns the entry distance and whether the box is hit (t0 <= t1).
+/// slabs. Returns the interval (t0, t1); the box is hit where t0 <= t1 (the caller's
+/// compare, all lanes at once).
 #[inline(always)]
-fn clip_interval(near: [f32; 3], far: [f32; 3], t_min: f32, bound: f32) -> (f32, bool) {
+fn clip_interval(near: [f32; 3], far: [f32; 3], t_min: f32, bound: f32) -> (f32, f32) {
     let fx = far[0] + far[0].abs() * BOX_SLACK;
     let fy = far[1] + far[1].abs() * BOX_SLACK;
     let fz = far[2] + far[2].abs() * BOX_SLACK;
@@ -90,7 +92,7 @@ fn clip_interval(near: [f32; 3], far: [f32; 3], t_min: f32, bound: f32) -> (f32,
     t1 = if fx < t1 { fx } else { t1 };
     t1 = if fy < t1 { fy } else { t1 };
     t1 = if fz < t1 { fz } else { t1 };
-    (t0, t0 <= t1)
+    (t0, t1)
 }
 
 /// Asks the cache for what a step at `node` will read next: its far child's box (the
@@ -219,7 +221,7 @@ pub struct PacketHits {
 /// Returns the child to visit next with its lanes, or `None` when no lane enters either.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(super) fn descend<O: Origins>(
+pub(super) fn descend<B: Build, O: Origins>(
     g: &Globals<f32>,
     at: u32,
     node: &BvhNode,
@@ -234,8 +236,8 @@ pub(super) fn descend<O: Origins>(
     let (left, right) = (&nodes[at as usize + 1], &nodes[node.first as usize]);
     // The entry distances are not needed here (the order comes from the split axis).
     let mut near = [0.0f32; LANES];
-    let ml = box_lanes(left, r, t_min, bound, &mut near) & lanes;
-    let mr = box_lanes(right, r, t_min, bound, &mut near) & lanes;
+    let ml = box_lanes::<B, O>(left, r, t_min, bound, &mut near) & lanes;
+    let mr = box_lanes::<B, O>(right, r, t_min, bound, &mut near) & lanes;
     if ml != 0 && mr != 0 {
         // The nearer child by the split axis and the direction of the first lane that
         // enters either: the left child holds the lower centres on that axis, so a ray
@@ -334,7 +336,7 @@ fn blocking_lanes(
 /// tests are `box_interval`'s operations, against a t_max that never shrinks), so the
 /// answer is the same, whatever order the packet takes.
 #[inline(always)]
-pub(super) fn occluded_lanes(
+pub(super) fn occluded_lanes<B: Build>(
     g: &Globals<f32>,
     o: [[f32; LANES]; 3],
     d: &[[f32; LANES]; 3],
@@ -381,7 +383,7 @@ pub(super) fn occluded_lanes(
         return 0;
     }
     let mut near = [0.0f32; LANES];
-    let mut lanes = box_lanes(&nodes[0], &r, t_min, &bound, &mut near) & mask;
+    let mut lanes = box_lanes::<B, _>(&nodes[0], &r, t_min, &bound, &mut near) & mask;
     let mut stack = [(0u32, 0 as Mask); BVH_STACK];
     let mut sp = 0usize;
     let mut at = 0u32;
@@ -391,7 +393,8 @@ pub(super) fn occluded_lanes(
             let node = &nodes[at as usize];
             let count = node.count_axis >> 2;
             if count == 0 {
-                let next = descend(g, at, node, &r, t_min, &bound, lanes, &mut stack, &mut sp);
+                let next =
+                    descend::<B, _>(g, at, node, &r, t_min, &bound, lanes, &mut stack, &mut sp);
                 if let Some(next) = next {
                     (at, lanes) = next;
                     continue;
@@ -424,7 +427,7 @@ pub(super) fn occluded_lanes(
 /// Every ray must have `rays[0].origin` as its origin (camera rays do), and `t_max` must
 /// be finite (`finite_bound`), as `closest_hit` passes it.
 #[inline(always)]
-pub fn closest_hit_packet(
+pub(super) fn closest_hit_packet<B: Build>(
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
     dir: &[[f32; LANES]; 3],
@@ -459,7 +462,7 @@ pub fn closest_hit_packet(
     }
     let mut near = [0.0f32; LANES];
     let mut bound = [t_max; LANES];
-    let mut mask = box_lanes(&nodes[0], &r, t_min, &bound, &mut near) & active;
+    let mut mask = box_lanes::<B, _>(&nodes[0], &r, t_min, &bound, &mut near) & active;
     if mask == 0 {
         return out;
     }
@@ -475,7 +478,7 @@ pub fn closest_hit_packet(
         let node = &nodes[at as usize];
         let count = node.count_axis >> 2;
         if count == 0 {
-            let next = descend(g, at, node, &r, t_min, &bound, mask, &mut stack, &mut sp);
+            let next = descend::<B, _>(g, at, node, &r, t_min, &bound, mask, &mut stack, &mut sp);
             if let Some(next) = next {
                 (at, mask) = next;
                 continue;
@@ -578,10 +581,10 @@ pub fn camera_rays(
 /// pixels at the same point of their pixel (as coherent as the block itself), the lanes
 /// summing their samples in `trace_pixel`'s order.
 #[inline(always)]
-pub(super) fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
+pub(super) fn trace_packet_body<B: Build>(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
     let half = 1.0f32 / (1.0 + 1.0);
     if !g.spec.antialias {
-        return sample_packet(g, i, j, half, half);
+        return sample_packet::<B>(g, i, j, half, half);
     }
     let n = g.cam.samples;
     let mut sum = [[0.0f32; 3]; LANES];
@@ -590,7 +593,7 @@ pub(super) fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; 
         let dy = sample_offset::<f32>(sy, n);
         for sx in 0..n {
             let dx = sample_offset::<f32>(sx, n);
-            let s = sample_packet(g, i, j, dx, dy);
+            let s = sample_packet::<B>(g, i, j, dx, dy);
             for l in 0..LANES {
                 for c in 0..3 {
                     sum[l][c] += s[l][c];
@@ -611,7 +614,7 @@ pub(super) fn trace_packet_body(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; 
 
 /// `trace_sample` at the point (dx, dy) of each pixel of the block.
 #[inline(always)]
-pub(super) fn sample_packet(
+pub(super) fn sample_packet<B: Build>(
     g: &Globals<f32>,
     i: u32,
     j: u32,
@@ -619,13 +622,13 @@ pub(super) fn sample_packet(
     dy: f32,
 ) -> [[f32; 4]; LANES] {
     let (rays, dir, active) = camera_rays(g, i, j, dx, dy);
-    let found = closest_hit_packet(g, &rays, &dir, active, 0.0, f32::MAX);
+    let found = closest_hit_packet::<B>(g, &rays, &dir, active, 0.0, f32::MAX);
     let hits = &found.hits;
     let mut lit: Mask = 0;
     for l in 0..LANES {
         lit |= ((hits[l].prim != PRIM_NONE) as Mask) << l;
     }
-    let colors = shade_lanes(g, &dir, &found, lit & active);
+    let colors = shade_lanes::<B>(g, &dir, &found, lit & active);
     // Loops, not `array::from_fn`: that is a generic function of its own, compiled once
     // for the baseline instruction set and called from every build.
     let bg = g.buf.params.background;
@@ -646,7 +649,7 @@ pub(super) fn sample_packet(
 /// point on their own ray (far off or infinite for a miss), the material and normal of
 /// the primitive of lane `mask`'s first lane.
 #[inline(always)]
-pub(super) fn shade_lanes(
+pub(super) fn shade_lanes<B: Build>(
     g: &Globals<f32>,
     dir: &[[f32; LANES]; 3],
     found: &PacketHits,
@@ -814,7 +817,7 @@ pub(super) fn shade_lanes(
                     [sd[0][l], sd[1][l], sd[2][l]] = [d.x, d.y, d.z];
                     skip[l] = hits[l].prim;
                 }
-                on &= !occluded_lanes(g, so, &sd, &skip, on);
+                on &= !occluded_lanes::<B>(g, so, &sd, &skip, on);
             }
             // Each lit lane's sum, chosen per lane (a select: the same value the branch gave).
             for c in 0..3 {
@@ -899,6 +902,7 @@ pub(super) fn phong_power_lanes(
 
 #[cfg(test)]
 mod tests {
+    use super::super::common::Portable;
     use super::super::prims::tests::Rng;
     use super::*;
 
@@ -912,9 +916,9 @@ mod tests {
     ) {
         assert!(r.neg.is_some(), "case {case}: a uniform-sign packet");
         let (mut a, mut b) = ([0.0f32; LANES], [0.0f32; LANES]);
-        let ma = box_lanes(node, &r, t_min, bound, &mut a);
+        let ma = box_lanes::<Portable, O>(node, &r, t_min, bound, &mut a);
         r.neg = None;
-        let mb = box_lanes(node, &r, t_min, bound, &mut b);
+        let mb = box_lanes::<Portable, O>(node, &r, t_min, bound, &mut b);
         assert_eq!(ma, mb, "case {case}: mask");
         assert_eq!(
             a.map(f32::to_bits),
