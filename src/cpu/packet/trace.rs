@@ -126,7 +126,8 @@ pub(super) fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
 }
 
 /// `closest_hit_all` for every lane in `mask`, into `best` (misses at t_max): spheres
-/// then triangles in index order, each lane's t_max its own nearest t so far.
+/// then triangles in index order, each lane's t_max its own nearest t so far. `best`'s
+/// lanes outside `mask` are left as they are.
 #[inline(always)]
 pub(super) fn closest_hit_all_lanes(
     g: &Globals<f32>,
@@ -135,14 +136,11 @@ pub(super) fn closest_hit_all_lanes(
     sh: &ShearLanes,
     mask: Mask,
     t_min: f32,
-    best: &mut [Hit<f32>; LANES],
+    best: &mut PacketHits,
 ) {
     if g.spec.has_spheres {
-        // Each lane's nearest t and sphere so far, as arrays (misses keep t_max).
-        let mut bt = [0.0f32; LANES];
-        for l in 0..LANES {
-            bt[l] = best[l].t;
-        }
+        // Each lane's nearest t and sphere so far (misses keep t_max).
+        let mut bt = best.t;
         let mut bp = [PRIM_NONE; LANES];
         for k in 0..g.buf.params.n_spheres {
             // Culled: a sphere that every lane passes well clear of is not tested.
@@ -153,29 +151,17 @@ pub(super) fn closest_hit_all_lanes(
                 bp[l] = if nearer { k } else { bp[l] };
             }
         }
-        let mut m = mask;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            m &= m - 1;
-            if bp[l] != PRIM_NONE {
-                best[l] = Hit {
-                    t: bt[l],
-                    prim: bp[l],
-                    u: 0.0,
-                    v: 0.0,
-                };
-            }
+        for l in 0..LANES {
+            let take = (mask >> l) & 1 != 0 && bp[l] != PRIM_NONE;
+            best.t[l] = if take { bt[l] } else { best.t[l] };
+            best.prim[l] = if take { bp[l] } else { best.prim[l] };
+            best.u[l] = if take { 0.0 } else { best.u[l] };
+            best.v[l] = if take { 0.0 } else { best.v[l] };
         }
     }
     if g.spec.has_triangles {
-        // As for spheres: each lane's nearest (t, prim, u, v) so far, as arrays.
-        let mut bt = [0.0f32; LANES];
-        let mut bp = [PRIM_NONE; LANES];
-        let mut bu = [0.0f32; LANES];
-        let mut bv = [0.0f32; LANES];
-        for l in 0..LANES {
-            (bt[l], bp[l], bu[l], bv[l]) = (best[l].t, best[l].prim, best[l].u, best[l].v);
-        }
+        // As for spheres: each lane's nearest (t, prim, u, v) so far.
+        let (mut bt, mut bp, mut bu, mut bv) = (best.t, best.prim, best.u, best.v);
         for k in 0..g.buf.params.n_triangles {
             let tri = &g.buf.triangles[k as usize];
             let id = k | TRIANGLE_BIT;
@@ -188,16 +174,12 @@ pub(super) fn closest_hit_all_lanes(
                 bv[l] = if nearer { h.v[l] } else { bv[l] };
             }
         }
-        let mut m = mask;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            m &= m - 1;
-            best[l] = Hit {
-                t: bt[l],
-                prim: bp[l],
-                u: bu[l],
-                v: bv[l],
-            };
+        for l in 0..LANES {
+            let take = (mask >> l) & 1 != 0;
+            best.t[l] = if take { bt[l] } else { best.t[l] };
+            best.prim[l] = if take { bp[l] } else { best.prim[l] };
+            best.u[l] = if take { bu[l] } else { best.u[l] };
+            best.v[l] = if take { bv[l] } else { best.v[l] };
         }
     }
 }
@@ -206,13 +188,34 @@ pub(super) fn closest_hit_all_lanes(
 /// `leaf_triangles`, else this.
 pub const NO_SLOT: u32 = u32::MAX;
 
-/// What `closest_hit_packet` finds.
+/// What `closest_hit_packet` finds: each lane's hit, as `closest_hit` gives it, as
+/// structure of arrays (the shading's lane loops read them in step; as an array of
+/// `Hit`s they were written and read back a lane at a time).
 pub struct PacketHits {
-    /// Each lane's hit, as `closest_hit` gives it.
-    pub hits: [Hit<f32>; LANES],
+    /// Each lane's `Hit::t`.
+    pub t: [f32; LANES],
+    /// Each lane's `Hit::prim`.
+    pub prim: [u32; LANES],
+    /// Each lane's `Hit::u`.
+    pub u: [f32; LANES],
+    /// Each lane's `Hit::v`.
+    pub v: [f32; LANES],
     /// Each lane's hit triangle's index in `leaf_triangles` (the same triangle as
     /// `triangles[hit.prim]`, in memory the traversal has just read), or `NO_SLOT`.
     pub slots: [u32; LANES],
+}
+
+impl PacketHits {
+    /// Lane l's hit.
+    #[inline(always)]
+    pub fn hit(&self, l: usize) -> Hit<f32> {
+        Hit {
+            t: self.t[l],
+            prim: self.prim[l],
+            u: self.u[l],
+            v: self.v[l],
+        }
+    }
 }
 
 /// A packet's step at interior node `node` (index `at`) for the lanes in `lanes`: both
@@ -435,27 +438,23 @@ pub(super) fn closest_hit_packet<B: Build>(
     t_min: f32,
     t_max: f32,
 ) -> PacketHits {
-    let miss = Hit {
-        t: t_max,
-        prim: PRIM_NONE,
-        u: 0.0,
-        v: 0.0,
-    };
     let mut out = PacketHits {
-        hits: [miss; LANES],
+        t: [t_max; LANES],
+        prim: [PRIM_NONE; LANES],
+        u: [0.0; LANES],
+        v: [0.0; LANES],
         slots: [NO_SLOT; LANES],
     };
     if active == 0 {
         return out;
     }
-    let best = &mut out.hits;
-    let slots = &mut out.slots;
     let r = Lanes::new(Shared(rays[0].origin), dir);
     let sh = shear_lanes(dir, g.spec.triangle_algo == TRIANGLE_WATERTIGHT);
     if !g.spec.use_bvh {
-        closest_hit_all_lanes(g, rays, &r, &sh, active, t_min, best);
+        closest_hit_all_lanes(g, rays, &r, &sh, active, t_min, &mut out);
         return out;
     }
+    let slots = &mut out.slots;
     let nodes = &g.buf.nodes;
     if g.buf.params.n_nodes == 0 {
         return out;
@@ -520,14 +519,7 @@ pub(super) fn closest_hit_packet<B: Build>(
         sp -= 1;
         (at, mask) = stack[sp];
     }
-    for l in 0..LANES {
-        best[l] = Hit {
-            t: bt[l],
-            prim: bp[l],
-            u: bu[l],
-            v: bv[l],
-        };
-    }
+    (out.t, out.prim, out.u, out.v) = (bt, bp, bu, bv);
     out
 }
 
@@ -623,10 +615,9 @@ pub(super) fn sample_packet<B: Build>(
 ) -> [[f32; 4]; LANES] {
     let (rays, dir, active) = camera_rays(g, i, j, dx, dy);
     let found = closest_hit_packet::<B>(g, &rays, &dir, active, 0.0, f32::MAX);
-    let hits = &found.hits;
     let mut lit: Mask = 0;
     for l in 0..LANES {
-        lit |= ((hits[l].prim != PRIM_NONE) as Mask) << l;
+        lit |= ((found.prim[l] != PRIM_NONE) as Mask) << l;
     }
     let colors = shade_lanes::<B>(g, &dir, &found, lit & active);
     // Loops, not `array::from_fn`: that is a generic function of its own, compiled once
@@ -634,8 +625,8 @@ pub(super) fn sample_packet<B: Build>(
     let bg = g.buf.params.background;
     let mut out = [[bg[0], bg[1], bg[2], -1.0]; LANES];
     for l in 0..LANES {
-        if hits[l].prim != PRIM_NONE {
-            out[l] = [colors[0][l], colors[1][l], colors[2][l], hits[l].t];
+        if found.prim[l] != PRIM_NONE {
+            out[l] = [colors[0][l], colors[1][l], colors[2][l], found.t[l]];
         }
     }
     out
@@ -655,7 +646,6 @@ pub(super) fn shade_lanes<B: Build>(
     found: &PacketHits,
     mask: Mask,
 ) -> [[f32; LANES]; 3] {
-    let hits = &found.hits;
     let mut color = [[0.0f32; LANES]; 3];
     if mask == 0 {
         return color;
@@ -668,23 +658,23 @@ pub(super) fn shade_lanes<B: Build>(
         if slot != NO_SLOT {
             return &g.buf.leaf_triangles()[slot as usize];
         }
-        &g.buf.triangles[(hits[l].prim & !TRIANGLE_BIT) as usize]
+        &g.buf.triangles[(found.prim[l] & !TRIANGLE_BIT) as usize]
     };
     // One primitive under every lane (a large triangle or sphere in view, the common
     // case): its material, and a triangle's normal, are found once and copied to every
     // lane, the values the lane loops would have found lane by lane. Copied lane by lane
     // (16 scalar stores read back as vectors) they were a third of the 2-triangle frame.
-    let prim0 = hits[first].prim;
+    let prim0 = found.prim[first];
     let mut one_prim = true;
     for l in 0..LANES {
-        one_prim &= hits[src(l)].prim == prim0;
+        one_prim &= (mask >> l) & 1 == 0 || found.prim[l] == prim0;
     }
     let mut material = [0u32; LANES];
     if one_prim {
-        material = [prim_material(g, &hits[first], || tri_of(first)); LANES];
+        material = [prim_material(g, &found.hit(first), || tri_of(first)); LANES];
     } else {
         for l in 0..LANES {
-            material[l] = prim_material(g, &hits[src(l)], || tri_of(src(l)));
+            material[l] = prim_material(g, &found.hit(src(l)), || tri_of(src(l)));
         }
     }
     // A loop, not `array::from_fn`: that was left a call of its own (5 % of the frame).
@@ -722,14 +712,14 @@ pub(super) fn shade_lanes<B: Build>(
     let mut p = [[0.0f32; LANES]; 3];
     let mut nv = [[0.0f32; LANES]; 3];
     for l in 0..LANES {
-        let t = hits[l].t;
+        let t = found.t[l];
         p[0][l] = o.x + dir[0][l] * t;
         p[1][l] = o.y + dir[1][l] * t;
         p[2][l] = o.z + dir[2][l] * t;
     }
     if one_prim && (prim0 & TRIANGLE_BIT) != 0 {
         // `prim_normal` of a triangle does not depend on the point.
-        let v = prim_normal(g, &hits[first], [0.0; 3], || tri_of(first));
+        let v = prim_normal(g, &found.hit(first), [0.0; 3], || tri_of(first));
         for k in 0..3 {
             nv[k] = [v[k]; LANES];
         }
@@ -743,8 +733,8 @@ pub(super) fn shade_lanes<B: Build>(
         }
     } else {
         for l in 0..LANES {
-            let hit = &hits[src(l)];
-            let v = prim_normal(g, hit, [p[0][l], p[1][l], p[2][l]], || tri_of(src(l)));
+            let hit = found.hit(src(l));
+            let v = prim_normal(g, &hit, [p[0][l], p[1][l], p[2][l]], || tri_of(src(l)));
             nv[0][l] = v[0];
             nv[1][l] = v[1];
             nv[2][l] = v[2];
@@ -773,7 +763,7 @@ pub(super) fn shade_lanes<B: Build>(
         for l in 0..LANES {
             let pl = V3::new(p[0][l], p[1][l], p[2][l]);
             let nl = V3::new(n[0][l], n[1][l], n[2][l]);
-            let sh = shading_at(g, &hits[src(l)], pl, nl);
+            let sh = shading_at(g, &found.hit(src(l)), pl, nl);
             [ns[0][l], ns[1][l], ns[2][l]] = [sh.n.x, sh.n.y, sh.n.z];
             [ps[0][l], ps[1][l], ps[2][l]] = [sh.p.x, sh.p.y, sh.p.z];
         }
@@ -815,7 +805,7 @@ pub(super) fn shade_lanes<B: Build>(
                     let d = V3::from(position) - o;
                     [so[0][l], so[1][l], so[2][l]] = [o.x, o.y, o.z];
                     [sd[0][l], sd[1][l], sd[2][l]] = [d.x, d.y, d.z];
-                    skip[l] = hits[l].prim;
+                    skip[l] = found.prim[l];
                 }
                 on &= !occluded_lanes::<B>(g, so, &sd, &skip, on);
             }
