@@ -669,12 +669,77 @@ pub(super) fn shade_lanes<B: Build>(
     for l in 0..LANES {
         one_prim &= (mask >> l) & 1 == 0 || found.prim[l] == prim0;
     }
+    let o = g.cam.eye;
+    // Each lane's own direction and t (a miss's point is far off or infinite: not used).
+    let mut p = [[0.0f32; LANES]; 3];
+    for l in 0..LANES {
+        let t = found.t[l];
+        p[0][l] = o.x + dir[0][l] * t;
+        p[1][l] = o.y + dir[1][l] * t;
+        p[2][l] = o.z + dir[2][l] * t;
+    }
+    // Each lane's material and its normal before the normalize (`prim_normal`).
     let mut material = [0u32; LANES];
+    let mut nv = [[0.0f32; LANES]; 3];
     if one_prim {
         material = [prim_material(g, &found.hit(first), || tri_of(first)); LANES];
+        if (prim0 & TRIANGLE_BIT) != 0 {
+            // `prim_normal` of a triangle does not depend on the point.
+            let v = prim_normal(g, &found.hit(first), [0.0; 3], || tri_of(first));
+            for k in 0..3 {
+                nv[k] = [v[k]; LANES];
+            }
+        } else {
+            // `prim_normal` of a sphere: the point less the centre, as a lane loop.
+            let c = g.buf.spheres[prim0 as usize].center;
+            for l in 0..LANES {
+                for k in 0..3 {
+                    nv[k][l] = p[k][l] - c[k];
+                }
+            }
+        }
     } else {
+        // Several primitives: each lane's triangle's corners (or sphere's centre) gathered
+        // into lane arrays with its material, one pass, and `prim_normal` from them as lane
+        // loops, its operations in its order: (b - a) × (c - a) for a triangle, p - centre
+        // for a sphere. (Through `prim_normal` a lane at a time it was scalar code, sixteen
+        // cross products a packet on a fine mesh.)
+        let mut corners = [[[0.0f32; LANES]; 3]; 3];
+        let mut centre = [[0.0f32; LANES]; 3];
+        let mut is_tri = [false; LANES];
         for l in 0..LANES {
-            material[l] = prim_material(g, &found.hit(src(l)), || tri_of(src(l)));
+            let s = src(l);
+            let prim = found.prim[s];
+            if (prim & TRIANGLE_BIT) != 0 {
+                let tri = tri_of(s);
+                for k in 0..3 {
+                    corners[0][k][l] = tri.a[k];
+                    corners[1][k][l] = tri.b[k];
+                    corners[2][k][l] = tri.c[k];
+                }
+                material[l] = tri.material;
+                is_tri[l] = true;
+            } else {
+                let sphere = &g.buf.spheres[prim as usize];
+                for k in 0..3 {
+                    centre[k][l] = sphere.center[k];
+                }
+                material[l] = sphere.material;
+            }
+        }
+        let [a, b, c] = &corners;
+        for l in 0..LANES {
+            let e1 = [b[0][l] - a[0][l], b[1][l] - a[1][l], b[2][l] - a[2][l]];
+            let e2 = [c[0][l] - a[0][l], c[1][l] - a[1][l], c[2][l] - a[2][l]];
+            let cross = [
+                e1[1] * e2[2] - e1[2] * e2[1],
+                e1[2] * e2[0] - e1[0] * e2[2],
+                e1[0] * e2[1] - e1[1] * e2[0],
+            ];
+            for k in 0..3 {
+                let radial = p[k][l] - centre[k][l];
+                nv[k][l] = if is_tri[l] { cross[k] } else { radial };
+            }
         }
     }
     // A loop, not `array::from_fn`: that was left a call of its own (5 % of the frame).
@@ -705,39 +770,6 @@ pub(super) fn shade_lanes<B: Build>(
                 ks[c][l] = m.ks[c];
             }
             model[l] = m.model;
-        }
-    }
-    let o = g.cam.eye;
-    // Each lane's own direction and t (a miss's point is far off or infinite: not used).
-    let mut p = [[0.0f32; LANES]; 3];
-    let mut nv = [[0.0f32; LANES]; 3];
-    for l in 0..LANES {
-        let t = found.t[l];
-        p[0][l] = o.x + dir[0][l] * t;
-        p[1][l] = o.y + dir[1][l] * t;
-        p[2][l] = o.z + dir[2][l] * t;
-    }
-    if one_prim && (prim0 & TRIANGLE_BIT) != 0 {
-        // `prim_normal` of a triangle does not depend on the point.
-        let v = prim_normal(g, &found.hit(first), [0.0; 3], || tri_of(first));
-        for k in 0..3 {
-            nv[k] = [v[k]; LANES];
-        }
-    } else if one_prim {
-        // `prim_normal` of a sphere: the point less the centre, as a lane loop.
-        let c = g.buf.spheres[prim0 as usize].center;
-        for l in 0..LANES {
-            for k in 0..3 {
-                nv[k][l] = p[k][l] - c[k];
-            }
-        }
-    } else {
-        for l in 0..LANES {
-            let hit = found.hit(src(l));
-            let v = prim_normal(g, &hit, [p[0][l], p[1][l], p[2][l]], || tri_of(src(l)));
-            nv[0][l] = v[0];
-            nv[1][l] = v[1];
-            nv[2][l] = v[2];
         }
     }
     let mut n = normalize_lanes(&nv);
