@@ -127,7 +127,8 @@ impl<O> Lanes<O> {
         for l in 0..LANES {
             let inv = [r.ix[l], r.iy[l], r.iz[l]];
             for k in 0..3 {
-                let ok = inv[k].is_finite() && inv[k] != 0.0 && (inv[k] < 0.0) == neg[k];
+                // `&`, not `&&`: no branch a lane, so that the loop vectorises.
+                let ok = inv[k].is_finite() & (inv[k] != 0.0) & ((inv[k] < 0.0) == neg[k]);
                 same[l] &= ok;
             }
         }

@@ -69,7 +69,8 @@ pub(super) fn shear_lanes(dir: &[[f32; LANES]; 3], watertight: bool) -> ShearLan
     }
     let mut same = [false; LANES];
     for l in 0..LANES {
-        same[l] = sh.kx[l] == sh.kx[0] && sh.ky[l] == sh.ky[0] && sh.kz[l] == sh.kz[0];
+        // `&`, not `&&`: no branch a lane, so that the loop vectorises.
+        same[l] = (sh.kx[l] == sh.kx[0]) & (sh.ky[l] == sh.ky[0]) & (sh.kz[l] == sh.kz[0]);
     }
     sh.uniform = (mask_of(&same) == Mask::MAX).then_some([sh.kx[0], sh.ky[0], sh.kz[0]]);
     sh

@@ -537,10 +537,13 @@ pub fn camera_rays(
 ) -> ([Ray<f32>; LANES], [[f32; LANES]; 3], Mask) {
     let c = &g.cam;
     let two = 1.0f32 + 1.0;
+    // The block's columns and rows inside the image, as a mask (lane dy * PACKET_W + dx).
+    let cols = c.width.saturating_sub(i).min(PACKET_W);
+    let rows = c.height.saturating_sub(j).min(LANES as u32 / PACKET_W);
+    let row: Mask = ((1u32 << cols) - 1) as Mask;
     let mut active: Mask = 0;
-    for l in 0..LANES {
-        let (px, py) = (i + l as u32 % PACKET_W, j + l as u32 / PACKET_W);
-        active |= ((px < c.width && py < c.height) as Mask) << l;
+    for y in 0..rows {
+        active |= row << (y * PACKET_W);
     }
     let mut d = [[0.0f32; LANES]; 3];
     for l in 0..LANES {
@@ -615,10 +618,11 @@ pub(super) fn sample_packet<B: Build>(
 ) -> [[f32; 4]; LANES] {
     let (rays, dir, active) = camera_rays(g, i, j, dx, dy);
     let found = closest_hit_packet::<B>(g, &rays, &dir, active, 0.0, f32::MAX);
-    let mut lit: Mask = 0;
+    let mut hit = [false; LANES];
     for l in 0..LANES {
-        lit |= ((found.prim[l] != PRIM_NONE) as Mask) << l;
+        hit[l] = found.prim[l] != PRIM_NONE;
     }
+    let lit = mask_of(&hit);
     let colors = shade_lanes::<B>(g, &dir, &found, lit & active);
     // Loops, not `array::from_fn`: that is a generic function of its own, compiled once
     // for the baseline instruction set and called from every build.
