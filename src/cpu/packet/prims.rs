@@ -531,16 +531,17 @@ pub(super) fn prim_normal<'a>(
 ) -> [f32; 3] {
     if (hit.prim & TRIANGLE_BIT) != 0 {
         let tri = tri();
-        let e1 = [0, 1, 2].map(|k| tri.b[k] - tri.a[k]);
-        let e2 = [0, 1, 2].map(|k| tri.c[k] - tri.a[k]);
-        return [
-            e1[1] * e2[2] - e1[2] * e2[1],
-            e1[2] * e2[0] - e1[0] * e2[2],
-            e1[0] * e2[1] - e1[1] * e2[0],
-        ];
+        return triangle_normal(tri.a.into(), tri.b.into(), tri.c.into()).into();
     }
     let c = g.buf.spheres[hit.prim as usize].center;
     [p[0] - c[0], p[1] - c[1], p[2] - c[2]]
+}
+
+/// A triangle's normal before its normalize, as the mirror's `prim_normal` makes it (with
+/// its own `V3` arithmetic): (b - a) × (c - a).
+#[inline(always)]
+pub(super) fn triangle_normal(a: V3<f32>, b: V3<f32>, c: V3<f32>) -> V3<f32> {
+    (b - a).cross(c - a)
 }
 
 /// The leaf's own copy of primitive `id`, at slot `k` of `prim_ids`, when it is a

@@ -10,7 +10,7 @@ use super::common::{
 };
 use super::prims::{
     ShearLanes, leaf_triangle, prim_lanes, prim_material, prim_normal, shear_lanes, sphere_lanes,
-    triangle_lanes,
+    triangle_lanes, triangle_normal,
 };
 use crate::buffers::{
     BOX_SLACK, BvhNode, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, TRIANGLE_BIT,
@@ -733,13 +733,12 @@ pub(super) fn shade_lanes<B: Build>(
         }
         let [a, b, c] = &corners;
         for l in 0..LANES {
-            let e1 = [b[0][l] - a[0][l], b[1][l] - a[1][l], b[2][l] - a[2][l]];
-            let e2 = [c[0][l] - a[0][l], c[1][l] - a[1][l], c[2][l] - a[2][l]];
-            let cross = [
-                e1[1] * e2[2] - e1[2] * e2[1],
-                e1[2] * e2[0] - e1[0] * e2[2],
-                e1[0] * e2[1] - e1[1] * e2[0],
-            ];
+            let cross: [f32; 3] = triangle_normal(
+                V3::new(a[0][l], a[1][l], a[2][l]),
+                V3::new(b[0][l], b[1][l], b[2][l]),
+                V3::new(c[0][l], c[1][l], c[2][l]),
+            )
+            .into();
             for k in 0..3 {
                 let radial = p[k][l] - centre[k][l];
                 nv[k][l] = if is_tri[l] { cross[k] } else { radial };
