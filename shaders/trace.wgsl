@@ -79,25 +79,27 @@ fn occluded_all(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
 // ---- the BVH -----------------------------------------------------------------------------
 
 /// The part (t0, t1) of the ray's interval (t_min, t_max) inside the node's box; the box
-/// is hit when t0 <= t1. The slab test, each exit distance widened by 2γ(3) of itself
-/// (pbrt), so rounding never loses a box that the exact ray enters. NaN slabs (a zero
-/// direction component at a slab's plane) constrain nothing. `inv_dir` is 1 / dir per
-/// component (±inf for a zero component).
+/// is hit when t0 <= t1. The slab test, the exit distance widened by 2γ(3) of itself
+/// (pbrt), so rounding never loses a box that the exact ray enters: the nearest exit,
+/// then widened once (x + |x|·2γ(3) never decreases as x grows, so that is each exit
+/// widened, then the nearest). NaN slabs (a zero direction component at a slab's plane)
+/// constrain nothing. `inv_dir` is 1 / dir per component (±inf for a zero component).
 fn box_interval(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_min: f32, t_max: f32) -> vec2<f32> {
     let t_lo = (node.lo - origin) * inv_dir;
     let t_hi = (node.hi - origin) * inv_dir;
     let swap = t_hi < t_lo;
     let near = select(t_lo, t_hi, swap);
-    var far = select(t_hi, t_lo, swap);
-    far = far + abs(far) * BOX_SLACK;
+    let far = select(t_hi, t_lo, swap);
     var t0 = t_min;
-    var t1 = t_max;
     t0 = select(t0, near.x, near.x > t0);
     t0 = select(t0, near.y, near.y > t0);
     t0 = select(t0, near.z, near.z > t0);
-    t1 = select(t1, far.x, far.x < t1);
-    t1 = select(t1, far.y, far.y < t1);
-    t1 = select(t1, far.z, far.z < t1);
+    var f = INFINITY;
+    f = select(f, far.x, far.x < f);
+    f = select(f, far.y, far.y < f);
+    f = select(f, far.z, far.z < f);
+    f = f + abs(f) * BOX_SLACK;
+    let t1 = select(t_max, f, f < t_max);
     return vec2<f32>(t0, t1);
 }
 

@@ -114,7 +114,12 @@ pub fn occluded_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, sk
 // ---- the BVH -----------------------------------------------------------------------------
 
 /// WGSL `box_interval`: the part (t0, t1) of (t_min, t_max) inside the node's box, by the
-/// conservative slab test; hit when t0 <= t1.
+/// conservative slab test; hit when t0 <= t1. The far end is the nearest exit distance
+/// (NaN slabs passed over) widened by `BOX_SLACK` of itself: x + |x|·`BOX_SLACK` never
+/// decreases as x grows (`slack_is_monotone`), so this is each exit widened, then the
+/// nearest taken, in one widening instead of three. Where an exit is -∞ (the widening
+/// of which is NaN, a slab that used to constrain nothing) the box is kept, which only
+/// visits more.
 pub fn box_interval<R: Real>(
     node: &BvhNode,
     origin: V3<R>,
@@ -130,20 +135,21 @@ pub fn box_interval<R: Real>(
         select(t_lo.y, t_hi.y, swap.1),
         select(t_lo.z, t_hi.z, swap.2),
     );
-    let mut far = V3::new(
+    let far = V3::new(
         select(t_hi.x, t_lo.x, swap.0),
         select(t_hi.y, t_lo.y, swap.1),
         select(t_hi.z, t_lo.z, swap.2),
     );
-    far = far + far.abs() * R::BOX_SLACK;
     let mut t0 = t_min;
-    let mut t1 = t_max;
     t0 = select(t0, near.x, near.x > t0);
     t0 = select(t0, near.y, near.y > t0);
     t0 = select(t0, near.z, near.z > t0);
-    t1 = select(t1, far.x, far.x < t1);
-    t1 = select(t1, far.y, far.y < t1);
-    t1 = select(t1, far.z, far.z < t1);
+    let mut f = R::INFINITY;
+    f = select(f, far.x, far.x < f);
+    f = select(f, far.y, far.y < f);
+    f = select(f, far.z, far.z < f);
+    f = f + f.abs() * R::BOX_SLACK;
+    let t1 = select(t_max, f, f < t_max);
     (t0, t1)
 }
 
@@ -466,5 +472,154 @@ pub fn query<R: Real>(g: &Globals<R>, r: &RayIn) -> HitOut {
         prim: h.prim,
         u: h.u.to_f32(),
         v: h.v.to_f32(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The widening `box_interval` gives the nearest exit.
+    fn widen(x: f32) -> f32 {
+        x + x.abs() * <f32 as Real>::BOX_SLACK
+    }
+
+    /// The first (x, next float up) where `g` decreases, over every finite f32 of
+    /// magnitude below 2^-100 or within 4096 floats of a power of two, and every 997th
+    /// float elsewhere, both signs.
+    fn first_decrease(g: impl Fn(f32) -> f32) -> Option<(f32, f32)> {
+        let top = f32::MAX.to_bits();
+        let dense = 2.0f32.powi(-100).to_bits();
+        let mut bits = 0u32;
+        while bits < top {
+            let near_power = (bits & 0x7F_FFFF) < 4096 || (bits & 0x7F_FFFF) > 0x7F_FFFF - 4096;
+            let step = if bits < dense || near_power { 1 } else { 997 };
+            for b in [bits, bits | 0x8000_0000] {
+                let x = f32::from_bits(b);
+                // x and the float next up from it (toward +∞).
+                let up = if b & 0x8000_0000 != 0 {
+                    f32::from_bits(b - 1)
+                } else {
+                    f32::from_bits(b + 1)
+                };
+                let (x, up) = if b == 0x8000_0000 {
+                    (-0.0, f32::from_bits(1))
+                } else {
+                    (x, up)
+                };
+                if up.is_finite() && g(up) < g(x) {
+                    return Some((x, up));
+                }
+            }
+            bits += step;
+        }
+        None
+    }
+
+    /// `box_interval` widens only the nearest exit, which is each exit widened and then
+    /// the nearest only if the widening never decreases: checked here over every float
+    /// near zero (where x·BOX_SLACK rounds) and near each power of two, and a stride
+    /// elsewhere (session 16 checked every finite f32 once).
+    #[test]
+    fn slack_is_monotone() {
+        assert_eq!(first_decrease(widen), None);
+    }
+
+    /// The twin: a widening that does decrease (x + 4|x| falls for x < 0) is caught.
+    #[test]
+    fn slack_check_can_fail() {
+        assert!(first_decrease(|x| x + x.abs() * 4.0).is_some());
+    }
+
+    /// The first case where `t1_of(far, t_max)` differs from the form the shader had
+    /// until session 17 (each exit widened, then the nearest taken): the same bits
+    /// wherever no exit is -∞, and where one is, the old form's hit implies the new one's.
+    /// Over 2M triples of special and random exits.
+    fn first_widening_mismatch(t1_of: impl Fn([f32; 3], f32) -> f32) -> Option<String> {
+        let specials = [
+            0.0f32,
+            -0.0,
+            1e-40,
+            -1e-40,
+            2.0f32.powi(-110),
+            1.0,
+            -1.0,
+            3.5,
+            1e30,
+            f32::MAX,
+            -f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let mut seed = 0x5eed_u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let r = (seed >> 40) as u32;
+            if r.is_multiple_of(4) {
+                specials[(r as usize / 4) % specials.len()]
+            } else {
+                f32::from_bits((seed >> 8) as u32)
+            }
+        };
+        let old = |far: [f32; 3], t_max: f32| {
+            let mut t1 = t_max;
+            for f in far.map(widen) {
+                t1 = select(t1, f, f < t1);
+            }
+            t1
+        };
+        for case in 0..2_000_000 {
+            let far = [next(), next(), next()];
+            let t_max = [1.0, 1e3, f32::MAX, 0.0][case % 4];
+            let (was, new) = (old(far, t_max), t1_of(far, t_max));
+            let agrees = if far.contains(&f32::NEG_INFINITY) {
+                [0.0f32, 1.0, 1e30]
+                    .iter()
+                    .all(|&t0| !(t0 <= was) || t0 <= new)
+            } else {
+                new.to_bits() == was.to_bits()
+            };
+            if !agrees {
+                return Some(format!("{far:?} t_max {t_max}: {was} -> {new}"));
+            }
+        }
+        None
+    }
+
+    /// `box_interval` itself, on a box whose exits are `far` exactly: low corner at -∞
+    /// (every entry -∞, no slab swapped), high corner `far`, origin 0, inverse direction 1.
+    fn box_t1(far: [f32; 3], t_max: f32) -> f32 {
+        let node = BvhNode {
+            lo: [f32::NEG_INFINITY; 3],
+            first: 0,
+            hi: far,
+            count_axis: 0,
+        };
+        let one = V3::new(1.0f32, 1.0, 1.0);
+        box_interval(&node, V3::new(0.0, 0.0, 0.0), one, 0.0, t_max).1
+    }
+
+    /// `box_interval`'s one widening equals the three it replaced (see
+    /// `first_widening_mismatch`).
+    #[test]
+    fn one_widening_equals_three() {
+        assert_eq!(first_widening_mismatch(box_t1), None);
+    }
+
+    /// The twin: a t1 one float off, only where it is finite and positive, is caught.
+    #[test]
+    fn widening_check_can_fail() {
+        let off = |far: [f32; 3], t_max: f32| {
+            let t1 = box_t1(far, t_max);
+            if t1 > 0.0 && t1 < f32::MAX {
+                t1.next_up()
+            } else {
+                t1
+            }
+        };
+        assert!(first_widening_mismatch(off).is_some());
     }
 }

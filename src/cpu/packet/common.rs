@@ -262,6 +262,23 @@ fn le_mask_avx512(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
     _mm512_cmp_ps_mask::<_CMP_LE_OQ>(x, y)
 }
 
+/// Lane l's choice of `a` where bit l of `m` is set, else `b`, as bit operations. LLVM
+/// turns `x[l] = if on { a } else { x[l] }` on an array behind a reference into a store
+/// made only where `on` holds: a branch a lane, never a vector, and vector reads after it
+/// of the lanes stored one at a time. This form is always an unconditional store, and
+/// vectorises.
+#[inline(always)]
+pub(super) fn choose_bits(m: Mask, l: usize, a: u32, b: u32) -> u32 {
+    let sel = 0u32.wrapping_sub(((m >> l) & 1) as u32);
+    (a & sel) | (b & !sel)
+}
+
+/// [`choose_bits`] of two `f32`s: `a` where bit l of `m` is set, else `b`, the very bits.
+#[inline(always)]
+pub(super) fn choose(m: Mask, l: usize, a: f32, b: f32) -> f32 {
+    f32::from_bits(choose_bits(m, l, a.to_bits(), b.to_bits()))
+}
+
 /// `a · b` of lane l, left to right as `V3::dot`.
 #[inline(always)]
 pub(super) fn dot_lane(a: &[[f32; LANES]; 3], b: &[[f32; LANES]; 3], l: usize) -> f32 {
