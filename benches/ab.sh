@@ -20,6 +20,11 @@
 # scene (primed once). A runs with the same folders; a build without the cache ignores them.
 # Output in bench-out/ab/whole.md.
 #
+# PINNED=1 compares the CPU tracer's frames with A and B running at the same time, one
+# thread each, each pinned to a core of its own (swapped every round), and takes each
+# round's B / A of the fastest of RUNS frames (default 15): the tightest comparison on a
+# noisy 2-core machine. Output in bench-out/ab/pinned.md.
+#
 # BENCH=1 compares `glint bench`'s own frames instead (timed runs into a kept image; CPU f32
 # and the GPU's specialised pipeline, trace + readback; BACKENDS=cpu adds --no-gpu,
 # TRIANGLE picks the algorithm, default watertight): each round A's bench, then B's. Output
@@ -151,6 +156,61 @@ if [ -n "${BENCH:-}" ]; then
         fi
         echo "| $s | $t | $ma | $mb | $ratio | $flag |" | tee -a "$out/bench.md"
     done < <(awk '{print $1, $2}' "$out/bench-rows.txt" | awk '!seen[$0]++')
+    [ "$flagged" = 0 ] || exit 3
+    exit 0
+fi
+
+if [ -n "${PINNED:-}" ]; then
+    # The CPU tracer's frames, A and B at the same time: one thread each
+    # (RAYON_NUM_THREADS=1), each pinned to a core of its own with `taskset`, the cores
+    # swapped every round; per scene and round, the fastest of `glint bench`'s RUNS frames
+    # (default 15: the least disturbed by the other process and the machine). The row's ratio is the median over rounds of each round's B / A, taken
+    # from two processes that saw the same minute of the machine. On this project's 2-core
+    # VM in a quiet stretch the rounds' ratios of such pairs stayed within a few per cent,
+    # where one-after-the-other rounds of one build moved by 0.7-1.35; in a noisy stretch
+    # they spread as widely (session 17): read the per-round column. Needs two cores.
+    [ "$(nproc)" -ge 2 ] || { echo "ab.sh: PINNED=1 needs two cores" >&2; exit 2; }
+    command -v taskset >/dev/null || { echo "ab.sh: PINNED=1 needs taskset (util-linux)" >&2; exit 2; }
+    frame_of() { # report.md -> the cpu-f32 row's fastest frame, ms ("median (min–max)")
+        awk -F'|' '{ t = $3; sub(/^ +/, "", t); split(t, w, " ")
+            if (w[1] == "cpu-f32") { split($8, m, /[(–)]/); print m[2] + 0; exit } }' "$1"
+    }
+    : >"$out/pinned-rows.txt"
+    for r in $(seq "$rounds"); do
+        if ((r % 2)); then ca=0 cb=1; else ca=1 cb=0; fi
+        for s in "${scenes[@]}"; do
+            rm -rf "$out/pin-A" "$out/pin-B"
+            RAYON_NUM_THREADS=1 taskset -c "$ca" "$A" bench "$s" --runs "${RUNS:-15}" --size "$size" \
+                --triangle "${TRIANGLE:-watertight}" --no-gpu --out "$out/pin-A" >/dev/null 2>&1 &
+            pa=$!
+            RAYON_NUM_THREADS=1 taskset -c "$cb" "$B" bench "$s" --runs "${RUNS:-15}" --size "$size" \
+                --triangle "${TRIANGLE:-watertight}" --no-gpu --out "$out/pin-B" >/dev/null 2>&1 &
+            pb=$!
+            wait "$pa" && wait "$pb" || { echo "ab.sh: a bench failed on $s" >&2; exit 1; }
+            echo "$(basename "$s" .toml) $r $(frame_of "$out/pin-A/report.md") $(frame_of "$out/pin-B/report.md")" \
+                >>"$out/pinned-rows.txt"
+        done
+    done
+    {
+        echo "A = $a_rev ($A), B = $b_rev ($B); CPU, one thread each, A and B at once on cores of their own, $rounds rounds; $(nproc) cores; $(date -u +%FT%TZ)"
+        echo
+        echo "| scene | A fastest ms (median of rounds) | B fastest ms (median of rounds) | B / A per round | B / A (median) | |"
+        echo "|---|---|---|---|---|---|"
+    } | tee "$out/pinned.md"
+    flagged=0
+    while read -r s; do
+        ma="$(awk -v s="$s" '$1 == s {printf "%s ", $3}' "$out/pinned-rows.txt" | median)"
+        mb="$(awk -v s="$s" '$1 == s {printf "%s ", $4}' "$out/pinned-rows.txt" | median)"
+        per="$(awk -v s="$s" '$1 == s {printf "%s%.3f", sep, $4 / $3; sep = ", "}' "$out/pinned-rows.txt")"
+        ratio="$(awk -v s="$s" '$1 == s {printf "%.6f ", $4 / $3}' "$out/pinned-rows.txt" | median)"
+        ratio="$(awk -v r="$ratio" 'BEGIN {printf "%.3f", r}')"
+        flag=""
+        if awk -v r="$ratio" 'BEGIN {exit !(r > 1.10)}'; then
+            flag="**SLOWER > 10 %**"
+            flagged=1
+        fi
+        echo "| $s | $ma | $mb | $per | $ratio | $flag |" | tee -a "$out/pinned.md"
+    done < <(awk '{print $1}' "$out/pinned-rows.txt" | awk '!seen[$0]++')
     [ "$flagged" = 0 ] || exit 3
     exit 0
 fi
