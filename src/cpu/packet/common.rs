@@ -361,6 +361,53 @@ mod tests {
         eprintln!("le_mask checked on {checks} vector builds' cases");
     }
 
+    /// The first lane of a mask where `pick(m, l, a, b)` is not the branch's choice, bit
+    /// for bit, over every lane of pseudo-random masks and NaN payloads, signed zeros and
+    /// infinities on both sides.
+    fn first_wrong_choice(pick: impl Fn(Mask, usize, f32, f32) -> f32) -> Option<(Mask, usize)> {
+        let vals = [
+            f32::from_bits(0x7fc0_1234),
+            f32::from_bits(0xffa0_0001),
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            0.0,
+            -0.0,
+            1.5,
+            -f32::MIN_POSITIVE,
+        ];
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..200 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            let m = s as Mask;
+            for l in 0..LANES {
+                for &a in &vals {
+                    for &b in &vals {
+                        let want = if (m >> l) & 1 != 0 { a } else { b };
+                        if pick(m, l, a, b).to_bits() != want.to_bits() {
+                            return Some((m, l));
+                        }
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// `choose` (and through it `choose_bits`) is the branch's choice, bit for bit.
+    #[test]
+    fn choose_is_the_branch() {
+        assert_eq!(first_wrong_choice(choose), None);
+    }
+
+    /// The twin: a choice that reads the neighbouring lane's bit is caught.
+    #[test]
+    fn a_wrong_choice_is_caught() {
+        let shifted = |m: Mask, l: usize, a: f32, b: f32| choose(m, (l + 1) % LANES, a, b);
+        assert!(first_wrong_choice(shifted).is_some());
+    }
+
     /// The check can fail: one lane's bit flipped is caught.
     #[test]
     fn a_wrong_mask_is_caught() {
