@@ -113,6 +113,13 @@ whole() { # binary scene backend cache-dir -> "wall_ms peak_MiB", or "fail"
     awk '{printf "%.0f %.0f", $1 * 1000, $2 / 1024}' "$out/time.txt"
 }
 median() { tr ' ' '\n' | grep -v '^$' | sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+flag_if_slower() { # ratio B / A -> sets the row's $flag, and $flagged when B is > 10 % slower
+    flag=""
+    if awk -v r="$1" 'BEGIN {exit !(r > 1.10)}'; then
+        flag="**SLOWER > 10 %**"
+        flagged=1
+    fi
+}
 
 if [ -n "${BENCH:-}" ]; then
     # `glint bench`'s own frames (timed runs into a kept image, CPU f32 and the GPU's
@@ -149,11 +156,7 @@ if [ -n "${BENCH:-}" ]; then
         ma="$(awk -v s="$s" -v t="$t" '$1 == s && $2 == t && $3 == "A" {printf "%s ", $4}' "$out/bench-rows.txt" | median)"
         mb="$(awk -v s="$s" -v t="$t" '$1 == s && $2 == t && $3 == "B" {printf "%s ", $4}' "$out/bench-rows.txt" | median)"
         ratio="$(awk -v a="$ma" -v b="$mb" 'BEGIN {printf "%.3f", b / a}')"
-        flag=""
-        if awk -v r="$ratio" 'BEGIN {exit !(r > 1.10)}'; then
-            flag="**SLOWER > 10 %**"
-            flagged=1
-        fi
+        flag_if_slower "$ratio"
         echo "| $s | $t | $ma | $mb | $ratio | $flag |" | tee -a "$out/bench.md"
     done < <(awk '{print $1, $2}' "$out/bench-rows.txt" | awk '!seen[$0]++')
     [ "$flagged" = 0 ] || exit 3
@@ -164,8 +167,9 @@ if [ -n "${PINNED:-}" ]; then
     # The CPU tracer's frames, A and B at the same time: one thread each
     # (RAYON_NUM_THREADS=1), each pinned to a core of its own with `taskset`, the cores
     # swapped every round; per scene and round, the fastest of `glint bench`'s RUNS frames
-    # (default 15: the least disturbed by the other process and the machine). The row's ratio is the median over rounds of each round's B / A, taken
-    # from two processes that saw the same minute of the machine. On this project's 2-core
+    # (default 15: the least disturbed by the other process and the machine). The row's
+    # ratio is the median over rounds of each round's B / A, taken from two processes
+    # that saw the same minute of the machine. On this project's 2-core
     # VM in a quiet stretch the rounds' ratios of such pairs stayed within a few per cent,
     # where one-after-the-other rounds of one build moved by 0.7-1.35; in a noisy stretch
     # they spread as widely (session 17): read the per-round column. Needs two cores.
@@ -204,11 +208,7 @@ if [ -n "${PINNED:-}" ]; then
         per="$(awk -v s="$s" '$1 == s {printf "%s%.3f", sep, $4 / $3; sep = ", "}' "$out/pinned-rows.txt")"
         ratio="$(awk -v s="$s" '$1 == s {printf "%.6f ", $4 / $3}' "$out/pinned-rows.txt" | median)"
         ratio="$(awk -v r="$ratio" 'BEGIN {printf "%.3f", r}')"
-        flag=""
-        if awk -v r="$ratio" 'BEGIN {exit !(r > 1.10)}'; then
-            flag="**SLOWER > 10 %**"
-            flagged=1
-        fi
+        flag_if_slower "$ratio"
         echo "| $s | $ma | $mb | $per | $ratio | $flag |" | tee -a "$out/pinned.md"
     done < <(awk '{print $1}' "$out/pinned-rows.txt" | awk '!seen[$0]++')
     [ "$flagged" = 0 ] || exit 3
@@ -275,11 +275,7 @@ for s in "${scenes[@]}"; do
         ma="$(median <<<"$ta")"
         mb="$(median <<<"$tb")"
         ratio="$(awk -v a="$ma" -v b="$mb" 'BEGIN {printf "%.3f", b / a}')"
-        flag=""
-        if awk -v r="$ratio" 'BEGIN {exit !(r > 1.10)}'; then
-            flag="**SLOWER > 10 %**"
-            flagged=1
-        fi
+        flag_if_slower "$ratio"
         echo "| $(basename "$s" .toml) | $backend | $ma | $mb | $ratio | $flag |" | tee -a "$out/last.md"
     done
 done
