@@ -58,6 +58,7 @@ const SPLITTER: f32 = 4097.0; // 2^12 + 1, Veltkamp's split for f32
 const BVH_STACK: u32 = 48u; // bvh::MAX_DEPTH: the builder never makes a deeper tree
 const BOX_SLACK: f32 = 4.76837158e-7; // 4 ε ≥ 2γ(3): pbrt's conservative slab test
 const NAIVE_MIN_SIN2: f32 = 1.9073486e-6; // 16 ε: see buffers::NAIVE_MIN_SIN2
+const FLUSH_BELOW: f32 = 1.17549435e-38; // 2^-126, the smallest normal f32: see buffers::FLUSH_BELOW
 
 // ---- shared structs (Rust: src/buffers.rs) --------------------------------------------
 
@@ -184,6 +185,17 @@ fn max0(x: f32) -> f32 {
 /// The larger of `a` and `b` (`b` when either is NaN).
 fn max2(a: f32, b: f32) -> f32 {
     return select(b, a, a > b);
+}
+
+/// `x`, or 0 where |x| is below the smallest normal f32: what a driver that flushes
+/// subnormals computes, made explicit so that every driver agrees (buffers::FLUSH_BELOW).
+fn flush(x: f32) -> f32 {
+    return select(x, 0.0, abs(x) < FLUSH_BELOW);
+}
+
+/// `flush` of each component.
+fn flush3(v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(flush(v.x), flush(v.y), flush(v.z));
 }
 
 /// `x` clamped to [0, 1] (NaN gives 0).

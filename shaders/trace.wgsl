@@ -274,10 +274,12 @@ fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
 // ---- shading -----------------------------------------------------------------------------
 
 /// `base^n` for the material's exponent: by squaring when `n_int >= 0` (so lavapipe and
-/// Rust agree bit for bit, and 0^0 = 1 on both), else `pow` (differs by a few ULP).
+/// Rust agree bit for bit, and 0^0 = 1 on both), else `pow` (differs by a few ULP); 0 where
+/// the power is subnormal (`flush`: base ≤ 1, so every product on the way is at most the
+/// last, and a driver that flushes a subnormal step ends at 0 too).
 fn phong_power(base: f32, m: Material) -> f32 {
     if m.n_int < 0 {
-        return pow(base, m.n);
+        return flush(pow(base, m.n));
     }
     var result = 1.0;
     var b = base;
@@ -292,7 +294,7 @@ fn phong_power(base: f32, m: Material) -> f32 {
         b = b * b;
         e = e >> 1u;
     }
-    return result;
+    return flush(result);
 }
 
 /// The offset origin of a shadow ray from `p` with facing normal `n` (buffers::SHADOW_EPSILON).
@@ -302,7 +304,8 @@ fn shadow_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 }
 
 /// SPEC.md's Phong model at a hit: I = Ia·ka + Σ Ip·kd·max(0, N·L) + Ip·ks·max(0, R·V)^n,
-/// each term only if the material's model has it, clamped to [0, 1].
+/// each term only if the material's model has it, clamped to [0, 1]. A term below the
+/// smallest normal f32 is 0 (`flush`), so that drivers that flush subnormals agree.
 fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     let m = materials[prim_material(hit)];
     let p = ray.origin + ray.dir * hit.t;
@@ -311,7 +314,7 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
         n = -n;
     }
     let sh = shading_at(hit, p, n);
-    var color = params.ambient * m.ka;
+    var color = flush3(params.ambient * m.ka);
     if USES_DIFFUSE && m.model != MODEL_AMBIENT {
         // The view vector is the reversed ray. Not `normalize(ray.origin - p)`: that is
         // origin − (origin + dir·t), which loses low bits to cancellation, and which
@@ -333,11 +336,11 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
                     continue;
                 }
             }
-            color = color + light.color * m.kd * ndl;
+            color = color + flush3(light.color * m.kd * ndl);
             if USES_PHONG && m.model == MODEL_PHONG {
                 let r = sh.n * (2.0 * ndl) - l;
                 let rv = max0(dot(r, v));
-                color = color + light.color * m.ks * phong_power(rv, m);
+                color = color + flush3(light.color * m.ks * phong_power(rv, m));
             }
         }
     }

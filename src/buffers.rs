@@ -101,8 +101,8 @@ impl SceneBuffers {
             tan_half: (cam.fov.to_radians() / 2.0).tan(),
             up,
             aspect: width as f32 / height as f32,
-            ambient: scene.ambient,
-            background: scene.background,
+            ambient: flush_colour(scene.ambient),
+            background: flush_colour(scene.background),
             tile_x: 0,
             tile_y: 0,
             tile_width: width,
@@ -114,15 +114,15 @@ impl SceneBuffers {
             .materials
             .iter()
             .map(|m| Material {
-                ka: m.ka,
+                ka: flush_colour(m.ka),
                 model: match m.model {
                     Model::Ambient => MODEL_AMBIENT,
                     Model::Diffuse => MODEL_DIFFUSE,
                     Model::Phong => MODEL_PHONG,
                 },
-                kd: m.kd,
+                kd: flush_colour(m.kd),
                 n: m.n,
-                ks: m.ks,
+                ks: flush_colour(m.ks),
                 n_int: exponent_as_int(m.n),
             })
             .collect();
@@ -141,7 +141,7 @@ impl SceneBuffers {
             .iter()
             .map(|l| Light {
                 position: l.position,
-                color: l.color,
+                color: flush_colour(l.color),
                 ..Light::default()
             })
             .collect();
@@ -228,6 +228,14 @@ impl SceneBuffers {
             shadows,
         }
     }
+}
+
+/// A colour as the shaders read it: a component below the smallest normal f32
+/// ([`FLUSH_BELOW`]) is 0, as a driver that flushes subnormal operands would read it (a
+/// product of it with a colour up to `MAX_COLOUR` can be normal, so the shading's own
+/// flush could not make the drivers agree).
+pub fn flush_colour(c: [f32; 3]) -> [f32; 3] {
+    c.map(|x| if x.abs() < FLUSH_BELOW { 0.0 } else { x })
 }
 
 /// The pipeline's override constants: what the compiled shader contains. Must match the

@@ -699,8 +699,12 @@ fn run(cli: Cli) -> Result<()> {
             for a in list {
                 let i = a.get_info();
                 println!(
-                    "{} ({:?}, {} {})",
-                    i.name, i.device_type, i.driver, i.driver_info
+                    "{} ({:?}, {} {}): {}",
+                    i.name,
+                    i.device_type,
+                    i.driver,
+                    i.driver_info,
+                    glint::gpu::exact::adapter_exactness(&a).describe()
                 );
             }
             Ok(())
@@ -741,10 +745,12 @@ fn run(cli: Cli) -> Result<()> {
             let d = glint::compare::diff(&g, &c);
             let e = glint::compare::diff(&c, &r);
             println!("adapter: {}", gpu.describe());
+            let kernel = gpu.compute_kernel(spec)?;
             println!(
-                "scene: {} at {w}x{h}, triangles: {algo}, traversal: {}",
+                "scene: {} at {w}x{h}, triangles: {algo}, traversal: {}, {}",
                 scene.display(),
-                gpu.compute_kernel(spec)?.traversal_name()
+                kernel.traversal_name(),
+                kernel.exactness().describe()
             );
             println!(
                 "gpu vs cpu: {} differing pixels (8-bit), {} differing in some f32 bit, {} hit/miss disagreements, \

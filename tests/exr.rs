@@ -5,12 +5,8 @@ mod common;
 
 gpu_sentinel!();
 
-use std::process::Command;
-
 use glint::buffers::{SceneBuffers, Specialisation};
 use glint::image::Image;
-
-const GLINT: &str = env!("CARGO_BIN_EXE_glint");
 
 fn dir(name: &str) -> common::Scratch {
     common::Scratch::new(&format!("exr-{name}"))
@@ -42,7 +38,7 @@ fn glint_diff_says_equal_or_how_two_renders_differ() {
     let render = |name: &str, extra: &[&str]| {
         let out = d.join(name);
         let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/umbrella.toml");
-        let o = Command::new(GLINT)
+        let o = common::glint_command()
             .args([
                 "render",
                 scene.to_str().unwrap(),
@@ -68,7 +64,7 @@ fn glint_diff_says_equal_or_how_two_renders_differ() {
     let b = render("b.exr", &args);
     let c = render("c.exr", &["--backend", "cpu", "--triangle", "naive"]);
     let diff = |x: &std::path::Path, y: &std::path::Path| {
-        let o = Command::new(GLINT)
+        let o = common::glint_command()
             .args(["diff", x.to_str().unwrap(), y.to_str().unwrap(), "--diff"])
             .arg(d.join("d.png"))
             .output()

@@ -92,7 +92,7 @@ fn scenes_larger_than_the_gpu_fall_back_to_the_cpu_under_auto() {
     )
     .unwrap();
     let run = |backend: &str| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        common::glint_command()
             .args(["render", scene.to_str().unwrap(), "-o"])
             .arg(d.join("out.png"))
             .args(["--backend", backend, "--adapter", &gpu.info.name])

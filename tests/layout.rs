@@ -170,6 +170,7 @@ fn shader_constants_match_rust() {
     assert_eq!(find("SPLITTER"), naga::Literal::F32(SPLITTER));
     assert_eq!(find("BOX_SLACK"), naga::Literal::F32(BOX_SLACK));
     assert_eq!(find("NAIVE_MIN_SIN2"), naga::Literal::F32(NAIVE_MIN_SIN2));
+    assert_eq!(find("FLUSH_BELOW"), naga::Literal::F32(FLUSH_BELOW));
     assert_eq!(
         find("BVH_STACK"),
         naga::Literal::U32(glint::bvh::MAX_DEPTH as u32)

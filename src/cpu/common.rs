@@ -104,6 +104,20 @@ pub fn max2<R: Real>(a: R, b: R) -> R {
     if a > b { a } else { b }
 }
 
+/// WGSL `flush`: `x`, or 0 where |x| is below the smallest normal f32
+/// ([`crate::kernel::layout::FLUSH_BELOW`], the same threshold in f64: the model's, not the
+/// type's).
+#[inline]
+pub fn flush<R: Real>(x: R) -> R {
+    if x.abs() < R::FLUSH_BELOW { R::ZERO } else { x }
+}
+
+/// WGSL `flush3`: [`flush`] of each component.
+#[inline]
+pub fn flush3<R: Real>(v: V3<R>) -> V3<R> {
+    V3::new(flush(v.x), flush(v.y), flush(v.z))
+}
+
 /// WGSL `clamp01`: `x` clamped to [0, 1] (NaN gives 0).
 #[inline]
 pub fn clamp01<R: Real>(x: R) -> R {

@@ -7,7 +7,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub use super::common::{BVH_STACK, Camera, Globals, Hit, Ray};
-use super::common::{clamp01, max0, max2};
+use super::common::{clamp01, flush, flush3, max0, max2};
 use super::prims::{
     hit_prim, hit_sphere, hit_triangle, prim_material, prim_normal, ray_shear, shading_at,
 };
@@ -343,10 +343,11 @@ pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: 
 
 // ---- shading -----------------------------------------------------------------------------
 
-/// WGSL `phong_power`: `base^n`, by squaring for an integer exponent, else `pow`.
+/// WGSL `phong_power`: `base^n`, by squaring for an integer exponent, else `pow`; 0 where
+/// the power is subnormal.
 pub fn phong_power<R: Real>(base: R, m: &Material) -> R {
     if m.n_int < 0 {
-        return base.powf(R::from_f32(m.n));
+        return flush(base.powf(R::from_f32(m.n)));
     }
     let mut result = R::ONE;
     let mut b = base;
@@ -361,7 +362,7 @@ pub fn phong_power<R: Real>(base: R, m: &Material) -> R {
         b = b * b;
         e >>= 1;
     }
-    result
+    flush(result)
 }
 
 /// WGSL `shadow_origin`: the offset origin of a shadow ray from `p` with facing normal `n`.
@@ -380,7 +381,7 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
         n = -n;
     }
     let sh = shading_at(g, hit, p, n);
-    let mut color = V3::from_f32(g.buf.params.ambient) * V3::from_f32(m.ka);
+    let mut color = flush3(V3::from_f32(g.buf.params.ambient) * V3::from_f32(m.ka));
     if g.spec.uses_diffuse && m.model != MODEL_AMBIENT {
         // The reversed ray, as the shader has it (see there why not `origin - p`).
         let v = (-ray.dir).normalize();
@@ -401,12 +402,12 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
                     continue;
                 }
             }
-            color = color + light_color * V3::from_f32(m.kd) * ndl;
+            color = color + flush3(light_color * V3::from_f32(m.kd) * ndl);
             if g.spec.uses_phong && m.model == MODEL_PHONG {
                 let two = R::ONE + R::ONE;
                 let r = sh.n * (two * ndl) - l;
                 let rv = max0(r.dot(v));
-                color = color + light_color * V3::from_f32(m.ks) * phong_power(rv, m);
+                color = color + flush3(light_color * V3::from_f32(m.ks) * phong_power(rv, m));
             }
         }
     }

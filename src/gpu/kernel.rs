@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use bytemuck::Pod;
 use wgpu::util::DeviceExt;
 
+use super::exact::{ExactSource, Exactness};
 use super::sync::{check_size, scoped, wait};
 use super::{GpuError, SHADER_SOURCE};
 use crate::buffers::{HitOut, Params, RayIn, SceneBuffers, Specialisation};
@@ -55,16 +56,28 @@ const IMAGE_BINDING: u32 = 5;
 /// Where `render_rgba8` writes (`image_rgba8` in the shader).
 const RGBA8_BINDING: u32 = 14;
 
+/// Where a kernel's pipelines get their shader module.
+enum ModuleSource {
+    /// Per pipeline, SPIR-V with every rewrite forbidden ([`super::exact`]).
+    Exact(Box<ExactSource>),
+    /// One WGSL module compiled by wgpu, specialised by override constants; the reason
+    /// the exact path was not taken.
+    Wgsl(wgpu::ShaderModule, &'static str),
+}
+
 /// The shader module with its layouts and a cache of specialised pipelines.
 pub struct Kernel {
     flavour: Flavour,
-    module: wgpu::ShaderModule,
+    source: ModuleSource,
     render_layout: wgpu::BindGroupLayout,
     rgba8_layout: wgpu::BindGroupLayout,
     query_layout: wgpu::BindGroupLayout,
     render_pipeline_layout: wgpu::PipelineLayout,
     rgba8_pipeline_layout: wgpu::PipelineLayout,
     query_pipeline_layout: wgpu::PipelineLayout,
+    /// The WGSL binding numbers of the render, render_rgba8 and query layouts, for the
+    /// exact path's binding map ([`super::exact::binding_map`]).
+    bindings: [Vec<u32>; 3],
     pipelines: Mutex<HashMap<(Specialisation, Entry), wgpu::ComputePipeline>>,
 }
 
@@ -226,20 +239,35 @@ impl Kernel {
         self.flavour == Flavour::RayQuery
     }
 
+    /// Whether this kernel's arithmetic reaches the driver with every rewrite forbidden.
+    pub fn exactness(&self) -> Exactness {
+        match self.source {
+            ModuleSource::Exact(_) => Exactness::NoContraction,
+            ModuleSource::Wgsl(_, why) => Exactness::NotGuaranteed(why),
+        }
+    }
+
     fn with_flavour(device: &wgpu::Device, flavour: Flavour) -> Result<Kernel, GpuError> {
+        let (label, text): (&str, std::borrow::Cow<str>) = match flavour {
+            Flavour::RayQuery => ("trace_rq.wgsl", super::rq::shader_source().into()),
+            Flavour::Packet { shadows } => (
+                "trace_subgroup.wgsl",
+                super::subgroup::shader_source(shadows).into(),
+            ),
+            Flavour::PerRay => ("trace.wgsl", SHADER_SOURCE.into()),
+        };
+        let exact = ExactSource::new(device, &text)?;
         scoped(device, "shader compilation", || {
-            let (label, source) = match flavour {
-                Flavour::RayQuery => ("trace_rq.wgsl", super::rq::shader_source().into()),
-                Flavour::Packet { shadows } => (
-                    "trace_subgroup.wgsl",
-                    super::subgroup::shader_source(shadows).into(),
+            let source = match exact {
+                Ok(e) => ModuleSource::Exact(Box::new(e)),
+                Err(why) => ModuleSource::Wgsl(
+                    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some(label),
+                        source: wgpu::ShaderSource::Wgsl(text),
+                    }),
+                    why,
                 ),
-                Flavour::PerRay => ("trace.wgsl", SHADER_SOURCE.into()),
             };
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(label),
-                source: wgpu::ShaderSource::Wgsl(source),
-            });
             let mut render = scene_entries();
             render.push(storage_entry(NORMALS_BINDING, true));
             let mut query = scene_entries();
@@ -273,8 +301,11 @@ impl Kernel {
                 })
             };
             let with = |binding| [render.clone(), vec![storage_entry(binding, false)]].concat();
-            let render_layout = layout("render", &with(IMAGE_BINDING));
-            let rgba8_layout = layout("render_rgba8", &with(RGBA8_BINDING));
+            let numbers = |e: &[wgpu::BindGroupLayoutEntry]| e.iter().map(|e| e.binding).collect();
+            let (render, rgba8) = (with(IMAGE_BINDING), with(RGBA8_BINDING));
+            let bindings = [numbers(&render), numbers(&rgba8), numbers(&query)];
+            let render_layout = layout("render", &render);
+            let rgba8_layout = layout("render_rgba8", &rgba8);
             let query_layout = layout("query", &query);
             let pl = |bgl: &wgpu::BindGroupLayout| {
                 device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -288,7 +319,8 @@ impl Kernel {
                 render_pipeline_layout: pl(&render_layout),
                 rgba8_pipeline_layout: pl(&rgba8_layout),
                 query_pipeline_layout: pl(&query_layout),
-                module,
+                bindings,
+                source,
                 render_layout,
                 rgba8_layout,
                 query_layout,
@@ -314,6 +346,23 @@ impl Kernel {
         }
         let t0 = Instant::now();
         let constants = spec.constants();
+        let (entry_point, k) = match entry {
+            Entry::Render => ("render", 0),
+            Entry::RenderRgba8 => ("render_rgba8", 1),
+            Entry::Query => ("query", 2),
+        };
+        // The exact path specialises while writing the SPIR-V, so its pipeline gets no
+        // constants; the WGSL path hands them to wgpu.
+        let exact_module;
+        let (module, constants): (&wgpu::ShaderModule, &[(&str, f64)]) = match &self.source {
+            ModuleSource::Exact(e) => {
+                exact_module = scoped(device, "shader compilation", || {
+                    e.module(device, entry_point, &constants, &self.bindings[k])
+                })??;
+                (&exact_module, &[])
+            }
+            ModuleSource::Wgsl(m, _) => (m, &constants),
+        };
         let p = scoped(device, "pipeline creation", || {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("trace"),
@@ -322,14 +371,10 @@ impl Kernel {
                     Entry::RenderRgba8 => &self.rgba8_pipeline_layout,
                     Entry::Query => &self.query_pipeline_layout,
                 }),
-                module: &self.module,
-                entry_point: Some(match entry {
-                    Entry::Render => "render",
-                    Entry::RenderRgba8 => "render_rgba8",
-                    Entry::Query => "query",
-                }),
+                module,
+                entry_point: Some(entry_point),
                 compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
+                    constants,
                     zero_initialize_workgroup_memory: false,
                 },
                 cache: None,

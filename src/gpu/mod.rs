@@ -2,8 +2,10 @@
 //! work ([`Kernel::render`], [`Kernel::query`]), which takes any `wgpu::Device` so that tests
 //! inject one.
 
+pub mod exact;
 mod kernel;
 pub mod rq;
+pub mod spirv;
 pub mod subgroup;
 mod sync;
 
@@ -249,6 +251,7 @@ impl Gpu {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("glint"),
             required_features: subgroups
+                | (adapter.features() & exact::FEATURES)
                 | if rq {
                     wgpu::Features::EXPERIMENTAL_RAY_QUERY
                 } else {

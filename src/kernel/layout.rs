@@ -54,6 +54,14 @@ pub const BOX_SLACK: f32 = 4.0 * f32::EPSILON;
 /// primitive (`tests/slivers.rs`). WGSL: `NAIVE_MIN_SIN2`.
 pub const NAIVE_MIN_SIN2: f32 = 16.0 * f32::EPSILON;
 
+/// The smallest normal f32 (2^-126): a shading term below it is taken as 0 (WGSL
+/// `flush`), on every tracer. Mesa's lavapipe flushes subnormal results and operands to
+/// zero in compute shaders from 26.1 on (the worker threads run with x86's FTZ and DAZ), as
+/// most GPUs may; 22.3 and 25.0 keep them. Flushing explicitly where glint's values can
+/// become subnormal (the Phong power of a small base, and the products that scale it) makes
+/// the image the same on both kinds of driver and on the CPU. WGSL: `FLUSH_BELOW`.
+pub const FLUSH_BELOW: f32 = f32::MIN_POSITIVE;
+
 /// Veltkamp's splitter for f32 (2^12 + 1), used by Dekker's exact product. WGSL: `SPLITTER`.
 pub const SPLITTER: f32 = 4097.0;
 

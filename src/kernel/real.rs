@@ -37,6 +37,9 @@ pub trait Real:
     const BOX_SLACK: Self;
     /// The naive test's sliver bound, 16 ε (`buffers::NAIVE_MIN_SIN2`).
     const NAIVE_MIN_SIN2: Self;
+    /// The smallest normal f32, below which a shading term is 0 (`buffers::FLUSH_BELOW`),
+    /// in this type.
+    const FLUSH_BELOW: Self;
     /// WGSL `bitcast<f32>(bitcast<u32>(x) + 1u)`: the next float up, for positive finite x.
     fn bits_plus_one(self) -> Self;
     /// Exact conversion from f32.
@@ -61,6 +64,7 @@ impl Real for f32 {
     const EPSILON: Self = crate::kernel::layout::SHADOW_EPSILON;
     const BOX_SLACK: Self = crate::kernel::layout::BOX_SLACK;
     const NAIVE_MIN_SIN2: Self = crate::kernel::layout::NAIVE_MIN_SIN2;
+    const FLUSH_BELOW: Self = crate::kernel::layout::FLUSH_BELOW;
     fn bits_plus_one(self) -> Self {
         f32::from_bits(self.to_bits().wrapping_add(1))
     }
@@ -92,6 +96,7 @@ impl Real for f64 {
     const EPSILON: Self = f64::EPSILON;
     const BOX_SLACK: Self = 4.0 * f64::EPSILON;
     const NAIVE_MIN_SIN2: Self = 16.0 * f64::EPSILON;
+    const FLUSH_BELOW: Self = crate::kernel::layout::FLUSH_BELOW as f64;
     fn bits_plus_one(self) -> Self {
         f64::from_bits(self.to_bits().wrapping_add(1))
     }

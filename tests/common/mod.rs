@@ -42,6 +42,22 @@ impl Drop for Scratch {
     }
 }
 
+/// A command that runs the `glint` binary the way this test process runs: through
+/// `GLINT_LAVAPIPE_LOADER` where `.ci/lavapipe.sh 26` set one (a driver built for a newer
+/// C library than the system's runs only through its own dynamic loader, and a child
+/// started plainly would find no adapter), else directly.
+pub fn glint_command() -> std::process::Command {
+    let exe = env!("CARGO_BIN_EXE_glint");
+    match std::env::var_os("GLINT_LAVAPIPE_LOADER") {
+        Some(loader) if !loader.is_empty() => {
+            let mut c = std::process::Command::new(loader);
+            c.arg(exe);
+            c
+        }
+        _ => std::process::Command::new(exe),
+    }
+}
+
 /// The process's GPU. Panics (fails the test) when there is no adapter, unless
 /// `GLINT_SKIP_GPU=1`, in which case it says loudly that the test is skipped and returns None.
 pub fn gpu() -> Option<&'static Gpu> {
@@ -140,13 +156,37 @@ pub fn run_probe(
     invocations: usize,
 ) -> Vec<[f32; 4]> {
     let d = &gpu.device;
-    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+    // The probe reaches the driver as the kernel does: NoContraction SPIR-V where the
+    // device takes it (glint::gpu::exact), else WGSL.
+    let module = match glint::gpu::exact::ExactSource::new(d, src).expect("probe compiles") {
+        Ok(exact) => exact.module(d, "main", &[], &[0, 1]).expect("probe module"),
+        Err(_) => d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: None,
+            source: wgpu::ShaderSource::Wgsl(src.into()),
+        }),
+    };
+    let entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: None,
-        source: wgpu::ShaderSource::Wgsl(src.into()),
+        entries: &[entry(0, true), entry(1, false)],
+    });
+    let layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: None,
+        bind_group_layouts: &[Some(&bgl)],
+        immediate_size: 0,
     });
     let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: None,
-        layout: None,
+        layout: Some(&layout),
         module: &module,
         entry_point: Some("main"),
         compilation_options: Default::default(),
@@ -172,7 +212,7 @@ pub fn run_probe(
     });
     let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
-        layout: &pipeline.get_bind_group_layout(0),
+        layout: &bgl,
         entries: &[
             wgpu::BindGroupEntry {
                 binding: 0,

@@ -16,7 +16,7 @@ use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE,
     TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle,
 };
-use crate::cpu::common::{BVH_STACK, Globals, Hit, Ray, clamp01, max0};
+use crate::cpu::common::{BVH_STACK, Globals, Hit, Ray, clamp01, flush, max0};
 use crate::cpu::prims::{hit_prim, shading_at};
 use crate::cpu::trace::{
     finite_bound, nearer, phong_power, sample_offset, shadow_origin, tie_bound,
@@ -800,7 +800,7 @@ pub(super) fn shade_lanes<B: Build>(
             n[2][l] = -n[2][l];
         }
         for k in 0..3 {
-            color[k][l] = ambient[k] * ka[k][l];
+            color[k][l] = flush(ambient[k] * ka[k][l]);
         }
         diffuse_flags[l] = model[l] != MODEL_AMBIENT;
     }
@@ -862,7 +862,7 @@ pub(super) fn shade_lanes<B: Build>(
             // Each lit lane's sum, chosen per lane (a select: the same value the branch gave).
             for c in 0..3 {
                 for l in 0..LANES {
-                    let lit = color[c][l] + light_color[c] * kd[c][l] * ndl[l];
+                    let lit = color[c][l] + flush(light_color[c] * kd[c][l] * ndl[l]);
                     color[c][l] = if (on >> l) & 1 != 0 { lit } else { color[c][l] };
                 }
             }
@@ -883,7 +883,7 @@ pub(super) fn shade_lanes<B: Build>(
                 let pw = phong_power_lanes(&rv, &mats, phong);
                 for c in 0..3 {
                     for l in 0..LANES {
-                        let lit = color[c][l] + light_color[c] * ks[c][l] * pw[l];
+                        let lit = color[c][l] + flush(light_color[c] * ks[c][l] * pw[l]);
                         color[c][l] = if (phong >> l) & 1 != 0 {
                             lit
                         } else {
@@ -903,8 +903,8 @@ pub(super) fn shade_lanes<B: Build>(
 }
 
 /// `phong_power` of every lane in `mask`: integer exponents by squaring as lane loops (a
-/// lane whose exponent is spent multiplies no further, as the scalar loop stops), other
-/// exponents through `phong_power` itself.
+/// lane whose exponent is spent multiplies no further, as the scalar loop stops), then
+/// flushed as the scalar one is; other exponents through `phong_power` itself.
 #[inline(always)]
 pub(super) fn phong_power_lanes(
     base: &[f32; LANES],
@@ -936,6 +936,9 @@ pub(super) fn phong_power_lanes(
             b[l] = b[l] * b[l];
             e[l] >>= 1;
         }
+    }
+    for l in 0..LANES {
+        result[l] = flush(result[l]);
     }
     result
 }
