@@ -3,9 +3,12 @@
 #
 # 1. On a machine with no Vulkan driver it installs Mesa's lavapipe (a CPU Vulkan) first.
 # 2. fmt, clippy -D warnings, then the whole suite on the system's lavapipe.
-# 3. Every test binary with GPU tests again on Mesa >= 25's lavapipe, which
-#    `.ci/lavapipe.sh` provides without touching the system (Debian 12: from backports,
-#    unpacked privately; where the system's Mesa is already >= 25 that pass uses it).
+# 3. Every test binary with GPU tests again on Mesa 25.0's lavapipe and on Mesa 26.1's,
+#    which `.ci/lavapipe.sh` provides without touching the system (Debian 12: from
+#    bookworm-backports and from Debian 13's trixie-backports, unpacked privately; 26.1's
+#    test binaries run through the unpacked tree's own dynamic loader, as cargo's runner).
+#    Each pass asserts the driver it runs on and, as every GPU test does on lavapipe, that
+#    the GPU image equals the CPU mirror's in every bit.
 #
 # Each pass prints the adapter's name, driver and version. A pass that cannot get its
 # driver fails with the reason; nothing is skipped in silence. GLINT_SKIP_GPU=1 skips the
@@ -61,35 +64,42 @@ cargo test --locked --no-fail-fast 2>&1 | tee /tmp/glint-pass1.log
 [ "${PIPESTATUS[0]}" = 0 ] || exit 1
 summary+=("pass 1 ($([ "$skip_gpu" = 1 ] && echo 'GPU SKIPPED' || echo "$line1")): $(grep -c '^test .* ok$' /tmp/glint-pass1.log) tests ok in $((SECONDS - start)) s")
 
-# ---- pass 2: the GPU test binaries on Mesa >= 25 ----------------------------------------
+# ---- passes 2 and 3: the GPU test binaries on Mesa 25.0 and on Mesa 26.1 ---------------
+gpu_bins=()
+for f in $(grep -l '^gpu_sentinel!();' tests/*.rs); do
+    gpu_bins+=(--test "$(basename "$f" .rs)")
+done
+driver_pass() { # pass number, Mesa major
+    local n="$1" major="$2" settings line start=$SECONDS
+    settings="$(bash .ci/lavapipe.sh "$major")" || {
+        echo "glint: pass $n cannot get Mesa $major's lavapipe (.ci/lavapipe.sh $major failed, above)" >&2
+        return 1
+    }
+    (
+        eval "$settings"
+        line="$(adapter_line)" || {
+            echo "glint: pass $n has no adapter with the Mesa $major ICD" >&2
+            exit 1
+        }
+        grep -Eq "Mesa $major\." <<<"$line" || {
+            echo "glint: pass $n wanted Mesa $major but the adapter says: $line" >&2
+            exit 1
+        }
+        echo "=== pass $n: the GPU test binaries on $line ==="
+        # Mesa >= 24.1's lavapipe has ray queries: the ray-query tracer's tests must run here.
+        GLINT_EXPECT_RAY_QUERY=1 GLINT_EXPECT_DRIVER="Mesa ${GLINT_MESA_VERSION%%-*}" \
+            cargo test --locked --no-fail-fast "${gpu_bins[@]}" 2>&1 |
+            tee "/tmp/glint-pass$n.log"
+        [ "${PIPESTATUS[0]}" = 0 ] || exit 1
+        echo "$line" >"/tmp/glint-pass$n.adapter"
+    ) || return 1
+    summary+=("pass $n ($(cat "/tmp/glint-pass$n.adapter")): $(grep -c '^test .* ok$' "/tmp/glint-pass$n.log") tests ok in $((SECONDS - start)) s")
+}
 if [ "$skip_gpu" = 1 ]; then
-    summary+=("pass 2 (Mesa >= 25): SKIPPED, GLINT_SKIP_GPU=1")
+    summary+=("passes 2 and 3 (Mesa 25.0, 26.1): SKIPPED, GLINT_SKIP_GPU=1")
 else
-    start=$SECONDS
-    settings="$(bash .ci/lavapipe.sh)" || {
-        echo "glint: pass 2 cannot get Mesa >= 25's lavapipe (.ci/lavapipe.sh failed, above)" >&2
-        exit 1
-    }
-    eval "$settings"
-    line2="$(adapter_line)" || {
-        echo "glint: pass 2 has no adapter with the Mesa >= 25 ICD" >&2
-        exit 1
-    }
-    grep -Eq 'Mesa (2[5-9]|[3-9][0-9])\.' <<<"$line2" || {
-        echo "glint: pass 2 wanted Mesa >= 25 but the adapter says: $line2" >&2
-        exit 1
-    }
-    echo "=== pass 2: the GPU test binaries on $line2 ==="
-    bins=()
-    for f in $(grep -l '^gpu_sentinel!();' tests/*.rs); do
-        bins+=(--test "$(basename "$f" .rs)")
-    done
-    # Mesa >= 24.1's lavapipe has ray queries: the ray-query tracer's tests must run here.
-    GLINT_EXPECT_RAY_QUERY=1 GLINT_EXPECT_DRIVER="Mesa ${GLINT_MESA25_VERSION%%-*}" \
-        cargo test --locked --no-fail-fast "${bins[@]}" 2>&1 |
-        tee /tmp/glint-pass2.log
-    [ "${PIPESTATUS[0]}" = 0 ] || exit 1
-    summary+=("pass 2 ($line2): $(grep -c '^test .* ok$' /tmp/glint-pass2.log) tests ok in $((SECONDS - start)) s")
+    driver_pass 2 25 || exit 1
+    driver_pass 3 26 || exit 1
 fi
 
 echo

@@ -366,7 +366,8 @@ fn sample_offset(s: u32, n: u32) -> f32 {
 /// The colour of pixel (i, j) and, in w, the hit distance (−1 for a miss). With
 /// antialiasing, N = params.samples: the N×N points ((sx + 0.5) / N, (sy + 0.5) / N), rows
 /// sy top to bottom, each row sx left to right; their colours summed in that order and
-/// divided by N² (a box filter); w is the nearest hit's t (−1 when every sample misses).
+/// divided by N² (a box filter), a quotient below the smallest normal f32 flushed to 0 as
+/// the shading terms are; w is the nearest hit's t (−1 when every sample misses).
 /// One sample is one ray through the centre, the image without antialiasing to the bit.
 fn trace_pixel(i: u32, j: u32) -> vec4<f32> {
     if !ANTIALIAS {
@@ -386,7 +387,7 @@ fn trace_pixel(i: u32, j: u32) -> vec4<f32> {
             }
         }
     }
-    return vec4<f32>(sum / f32(n * n), t_near);
+    return vec4<f32>(flush3(sum / f32(n * n)), t_near);
 }
 
 // ---- entry points ------------------------------------------------------------------------

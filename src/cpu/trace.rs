@@ -455,7 +455,7 @@ pub fn trace_pixel<R: Real>(g: &Globals<R>, i: u32, j: u32) -> [R; 4] {
             }
         }
     }
-    let c = sum / V3::splat(R::from_u32(n * n));
+    let c = flush3(sum / V3::splat(R::from_u32(n * n)));
     [c.x, c.y, c.z, t_near]
 }
 

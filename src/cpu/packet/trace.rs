@@ -617,7 +617,12 @@ pub(super) fn trace_packet_body<B: Build>(g: &Globals<f32>, i: u32, j: u32) -> [
     let nn = (n * n) as f32;
     let mut out = [[0.0f32; 4]; LANES];
     for l in 0..LANES {
-        out[l] = [sum[l][0] / nn, sum[l][1] / nn, sum[l][2] / nn, t_near[l]];
+        out[l] = [
+            flush(sum[l][0] / nn),
+            flush(sum[l][1] / nn),
+            flush(sum[l][2] / nn),
+            t_near[l],
+        ];
     }
     out
 }
