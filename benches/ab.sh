@@ -42,7 +42,7 @@ mkdir -p "$out"
 # The sources of the working tree touched: a build of a revision in a worktree (below)
 # shares this project's target folder and leaves a fingerprint newer than any file edited
 # before it, and cargo then took the working tree for built: the "worktree" binary was the
-# revision's (found in session 12: three A/B runs had compared A with A). Touched, they are
+# revision's (found on 2026-12-02: three A/B runs had compared A with A). Touched, they are
 # rebuilt; the user's next `cargo build` is right too.
 touch_sources() {
     git ls-files -z -- src shaders tests examples benches build.rs Cargo.toml Cargo.lock |
@@ -90,9 +90,11 @@ for s in scenes/bunny.toml scenes/dragon.toml; do
 done
 fi
 
+# Where `.ci/lavapipe.sh 26` set GLINT_LAVAPIPE_LOADER, each binary runs through it (a
+# driver built for a newer C library than the system's; see that script).
 frame_ms() { # binary scene backend -> the frame time in ms, or "fail"
     local line
-    line="$("$1" render "$2" -o "$out/frame.png" --size "$size" --backend "$3" 2>/dev/null)" || {
+    line="$(${GLINT_LAVAPIPE_LOADER:+"$GLINT_LAVAPIPE_LOADER"} "$1" render "$2" -o "$out/frame.png" --size "$size" --backend "$3" 2>/dev/null)" || {
         echo fail
         return
     }
@@ -172,7 +174,7 @@ if [ -n "${PINNED:-}" ]; then
     # that saw the same minute of the machine. On this project's 2-core
     # VM in a quiet stretch the rounds' ratios of such pairs stayed within a few per cent,
     # where one-after-the-other rounds of one build moved by 0.7-1.35; in a noisy stretch
-    # they spread as widely (session 17): read the per-round column. Needs two cores.
+    # they spread as widely: read the per-round column. Needs two cores.
     [ "$(nproc)" -ge 2 ] || { echo "ab.sh: PINNED=1 needs two cores" >&2; exit 2; }
     command -v taskset >/dev/null || { echo "ab.sh: PINNED=1 needs taskset (util-linux)" >&2; exit 2; }
     frame_of() { # report.md -> the cpu-f32 row's fastest frame, ms ("median (min–max)")

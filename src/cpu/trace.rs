@@ -520,7 +520,7 @@ mod tests {
     /// `box_interval` widens only the nearest exit, which is each exit widened and then
     /// the nearest only if the widening never decreases: checked here over every float
     /// near zero (where x·BOX_SLACK rounds) and near each power of two, and a stride
-    /// elsewhere (session 16 checked every finite f32 once).
+    /// elsewhere (every finite f32 was checked once).
     #[test]
     fn slack_is_monotone() {
         assert_eq!(first_decrease(widen), None);
@@ -533,7 +533,7 @@ mod tests {
     }
 
     /// The first case where `t1_of(far, t_max)` differs from the form the shader had
-    /// until session 17 (each exit widened, then the nearest taken): the same bits
+    /// before 2026-12-03 (each exit widened, then the nearest taken): the same bits
     /// wherever no exit is -∞, and where one is, the old form's hit implies the new one's.
     /// Over 2M triples of special and random exits.
     fn first_widening_mismatch(t1_of: impl Fn([f32; 3], f32) -> f32) -> Option<String> {

@@ -108,8 +108,8 @@ pub struct Gpu {
     pub start_time: Duration,
 }
 
-/// Whether shadow rays should go in packets on this adapter (measured, `docs/bench/ab.md`,
-/// session 13): yes, except on lavapipe before Mesa 24.3, which runs both sides of every
+/// Whether shadow rays should go in packets on this adapter (measured 2026-12-02,
+/// `docs/bench/ab.md`): yes, except on lavapipe before Mesa 24.3, which runs both sides of every
 /// branch, even where no lane takes one (24.3 skips an inactive branch): there the packet
 /// shadow traversal measured 1.19–1.24× slower on the seed's bb8 with shadows and level on
 /// the peers' scenes, against 0.82–0.93 on Mesa 25. A driver whose version cannot be read

@@ -354,6 +354,10 @@ pub(super) fn load(
             *mtl_problem.borrow_mut() = Some(format!("MTL {}: {e}", obj_dir.join(p).display()));
             tobj::LoadError::OpenFileFailed
         })?;
+        if let Some((line, why)) = mtl_junk(&mtl) {
+            *mtl_problem.borrow_mut() = Some(format!("{}: line {line}: {why}", p.display()));
+            return Err(tobj::LoadError::MaterialParseError);
+        }
         if let Some(line) = short_colour_line(&mtl) {
             *mtl_problem.borrow_mut() = Some(format!(
                 "{}: line {line}: a colour (Ka, Kd, Ks, Ke) needs three numbers",
@@ -562,6 +566,20 @@ fn short_face_warning(n: usize, first: usize) -> String {
     )
 }
 
+/// Why an MTL's bytes are not an MTL text, as (line, message): not UTF-8, a NUL byte, or a
+/// line longer than `obj::MAX_LINE_BYTES`.
+fn mtl_junk(mtl: &[u8]) -> Option<(u32, String)> {
+    if let Err(e) = std::str::from_utf8(mtl) {
+        let line = mtl[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count() as u32
+            + 1;
+        return Some((line, "not UTF-8".to_string()));
+    }
+    super::obj::junk(mtl, true)
+}
+
 /// The first line (1-based) of an MTL whose Ka, Kd, Ks or Ke has fewer than three
 /// values: tobj 4 panics on those, so they are refused before it sees them.
 fn short_colour_line(mtl: &[u8]) -> Option<usize> {
@@ -627,10 +645,36 @@ fn gunzip(path: &Path, raw: Vec<u8>) -> Result<Vec<u8>, String> {
         use std::io::Read;
         let limit = super::max_input_bytes();
         let mut out = Vec::new();
-        flate2::read::GzDecoder::new(&raw[..])
-            .take(limit + 1)
-            .read_to_end(&mut out)
-            .map_err(|e| format!("cannot gunzip: {e}"))?;
+        let mut dec = flate2::read::GzDecoder::new(&raw[..]).take(limit + 1);
+        // Inflated a block at a time and watched for what no OBJ has (a NUL byte, a line
+        // longer than `obj::MAX_LINE_BYTES`), so that binary junk is refused after the
+        // first megabyte of it, not after the whole input limit.
+        let mut line_start = 0usize;
+        loop {
+            let old = out.len();
+            out.resize(old + GUNZIP_BLOCK, 0);
+            let n = dec
+                .read(&mut out[old..])
+                .map_err(|e| format!("cannot gunzip: {e}"))?;
+            out.truncate(old + n);
+            if n == 0 {
+                break;
+            }
+            let new = &out[old..];
+            let first_nl = new.iter().position(|&b| b == b'\n');
+            let long = match first_nl {
+                Some(k) => old + k - line_start > super::obj::MAX_LINE_BYTES,
+                None => out.len() - line_start > super::obj::MAX_LINE_BYTES,
+            };
+            if long || new.contains(&0) {
+                let (line, why) =
+                    super::obj::junk(&out, false).unwrap_or((1, "not an OBJ text".into()));
+                return Err(format!("line {line}: {why}"));
+            }
+            if first_nl.is_some() {
+                line_start = old + 1 + new.iter().rposition(|&b| b == b'\n').unwrap_or(0);
+            }
+        }
         if out.len() as u64 > limit {
             return Err(format!(
                 "unpacks to more than the input limit of {} MiB (set GLINT_MAX_INPUT_MIB to raise it)",
@@ -647,6 +691,11 @@ type ObjParse = Result<Option<Parsed>, String>;
 
 /// The bytes of text `gunzip_parse` inflates before it hands them to a parse.
 const GUNZIP_PIECE: usize = 2 << 20;
+
+/// The bytes `gunzip` inflates at a time, at most a line's length
+/// (`obj::MAX_LINE_BYTES`): a line that ends inside a block is no longer than the block.
+const GUNZIP_BLOCK: usize = 1 << 20;
+const _: () = assert!(GUNZIP_BLOCK <= super::obj::MAX_LINE_BYTES);
 
 /// Gunzips `raw` and parses the OBJ with glint's reader at once: pieces of about `piece`
 /// bytes of whole lines are parsed in parallel (`obj::parse_piece`) while the rest is
@@ -669,16 +718,22 @@ fn gunzip_parse(raw: &[u8], normals: Normals, piece: usize) -> Option<(Vec<u8>, 
     let mut buf = vec![0u8; size];
     let mut inflating = std::time::Duration::ZERO;
     let mut ok = true;
+    let mut junk = None;
     let pieces: Mutex<Vec<(usize, Option<super::obj::Piece>)>> = Mutex::new(Vec::new());
     rayon::scope(|s| {
         let mut dec = flate2::read::GzDecoder::new(raw);
         let mut rest: &mut [u8] = &mut buf[..];
         // Bytes at the head of `rest` inflated but not yet handed out.
         let mut filled = 0usize;
+        // The pieces handed out, to number the line of a junk error.
+        let mut handed: Vec<&[u8]> = Vec::new();
         for index in 0.. {
             let t = std::time::Instant::now();
             let mut want = (filled + piece).min(rest.len());
             let mut cut = None;
+            // Bytes of `rest` already searched for a line end (each byte once: a long line
+            // read on is not searched again from its start).
+            let mut searched = 0usize;
             while cut.is_none() {
                 while filled < want {
                     match dec.read(&mut rest[filled..want]) {
@@ -696,11 +751,23 @@ fn gunzip_parse(raw: &[u8], normals: Normals, piece: usize) -> Option<(Vec<u8>, 
                 if filled < want || filled == rest.len() {
                     // The end of the stream, or of the buffer: all that is left.
                     cut = Some(filled);
-                } else if let Some(nl) = rest[..filled].iter().rposition(|&b| b == b'\n') {
-                    cut = Some(nl + 1);
+                } else if let Some(nl) = rest[searched..filled].iter().rposition(|&b| b == b'\n') {
+                    cut = Some(searched + nl + 1);
+                } else if filled > super::obj::MAX_LINE_BYTES || rest[searched..filled].contains(&0)
+                {
+                    // No line end in more than a line's length, or a NUL: not an OBJ text.
+                    let before: usize = handed.iter().map(|h| line_count(h)).sum();
+                    let (line, why) = super::obj::junk(&rest[..filled], false)
+                        .unwrap_or((1, "not an OBJ text".into()));
+                    junk = Some(format!("line {}: {why}", before as u32 + line));
+                    break;
                 } else {
+                    searched = filled;
                     want = (want + piece).min(rest.len()); // one long line: read on
                 }
+            }
+            if junk.is_some() {
+                break;
             }
             let at_end = filled < want || filled == rest.len();
             if at_end && ok {
@@ -713,6 +780,7 @@ fn gunzip_parse(raw: &[u8], normals: Normals, piece: usize) -> Option<(Vec<u8>, 
             rest = tail;
             filled -= cut;
             let head: &[u8] = head;
+            handed.push(head);
             if index == 0 && head.starts_with(b"\xEF\xBB\xBF") {
                 ok = false;
                 break;
@@ -732,6 +800,9 @@ fn gunzip_parse(raw: &[u8], normals: Normals, piece: usize) -> Option<(Vec<u8>, 
         }
     });
     crate::stages::record("gunzip", inflating);
+    if let Some(why) = junk {
+        return Some((Vec::new(), Err(why)));
+    }
     let mut pieces = pieces.into_inner().ok()?;
     if !ok {
         return None;
@@ -741,6 +812,11 @@ fn gunzip_parse(raw: &[u8], normals: Normals, piece: usize) -> Option<(Vec<u8>, 
     let parsed = super::obj::join_pieces(pieces?, normals);
     crate::stages::record("OBJ parse", t0.elapsed().saturating_sub(inflating));
     Some((buf, parsed))
+}
+
+/// The line ends in `bytes`.
+fn line_count(bytes: &[u8]) -> usize {
+    bytes.iter().filter(|&&b| b == b'\n').count()
 }
 
 /// Records the gunzip stage when dropped (at every return of `gunzip`).

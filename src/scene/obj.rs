@@ -28,6 +28,59 @@ pub struct Parsed {
 /// `Parsed::normal_ix` of a corner without a `vn` index.
 pub const NO_NORMAL: u32 = u32::MAX;
 
+/// The longest line an OBJ or MTL file may have: 1 MiB. Real files have lines of tens of
+/// bytes (a face of a few hundred corners is a few kilobytes); a longer one means the file
+/// is not text (a binary file, or one endless run of the same byte), and reading on would
+/// only cost time and memory before the same verdict.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// The line (from 1) of byte `pos` of `bytes`.
+fn line_at(bytes: &[u8], pos: usize) -> u32 {
+    bytes[..pos.min(bytes.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count() as u32
+        + 1
+}
+
+/// Why `bytes`, all or the start of an OBJ or MTL text, is not one: a NUL byte, or a line
+/// longer than [`MAX_LINE_BYTES`] (where `whole`, the last line counts as ended), as (line
+/// from 1, message). `None` when neither is seen. One pass over the bytes, only to find
+/// the line of what it found.
+pub fn junk(bytes: &[u8], whole: bool) -> Option<(u32, String)> {
+    if bytes.contains(&0) {
+        let at = bytes.iter().position(|&b| b == 0).unwrap_or(0);
+        return Some((
+            line_at(bytes, at),
+            "a NUL byte: this is not a text file".to_string(),
+        ));
+    }
+    let mut start = 0;
+    for end in bytes
+        .iter()
+        .enumerate()
+        .filter(|&(_, &b)| b == b'\n')
+        .map(|(k, _)| k)
+        .chain(whole.then_some(bytes.len()))
+    {
+        if end - start > MAX_LINE_BYTES {
+            return Some((line_at(bytes, start), too_long()));
+        }
+        start = end + 1;
+    }
+    if !whole && bytes.len().saturating_sub(start) > MAX_LINE_BYTES {
+        return Some((line_at(bytes, start), too_long()));
+    }
+    None
+}
+
+fn too_long() -> String {
+    format!(
+        "a line longer than {} MiB: this is not an OBJ or MTL text",
+        MAX_LINE_BYTES >> 20
+    )
+}
+
 /// Whether a reader takes the normals (`vn` and the faces' third indices): only a smooth
 /// mesh needs them, and only then are they checked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -257,11 +310,17 @@ fn lines(text: &str) -> impl Iterator<Item = &str> {
 
 /// One chunk of whole lines. Lines are counted from 1 within the chunk.
 fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chunk>, (u32, String)> {
+    if text.as_bytes().contains(&0) {
+        return Err(junk(text.as_bytes(), true).unwrap_or((1, String::new())));
+    }
     let mut c = Chunk::default();
     let mut face: Vec<i64> = Vec::with_capacity(8);
     let mut face_n: Vec<i64> = Vec::with_capacity(8);
     for line in lines(text) {
         c.lines += 1;
+        if line.len() > MAX_LINE_BYTES {
+            return Err((c.lines, too_long()));
+        }
         let mut words = line.split_ascii_whitespace();
         let Some(kw) = words.next() else { continue };
         match kw {

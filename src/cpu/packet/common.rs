@@ -144,7 +144,7 @@ impl<O> Lanes<O> {
 /// byte's flag is its sign bit, and `pmovmskb` gathers the sixteen sign bits. Elsewhere,
 /// branch-free, eight lanes at a time: the flags as bytes times 0x0102040810204080 puts
 /// byte l's bit in bit 56 + l, and no two partial products share a bit, so nothing carries.
-/// (The multiply was the x86 path too until session 16: per 1M-triangle frame, 4–5 % of
+/// (The multiply was the x86 path too until 2026-12-03: per 1M-triangle frame, 4–5 % of
 /// the samples, mostly the watertight test's flags for its exact fallback.)
 #[inline(always)]
 pub(super) fn mask_of(flags: &[bool; LANES]) -> Mask {
@@ -271,6 +271,15 @@ fn le_mask_avx512(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
 pub(super) fn choose_bits(m: Mask, l: usize, a: u32, b: u32) -> u32 {
     let sel = 0u32.wrapping_sub(((m >> l) & 1) as u32);
     (a & sel) | (b & !sel)
+}
+
+/// The mirror's `flush` (WGSL `flush`) as bit operations: `x`, or +0 where |x| is below
+/// the smallest normal f32, the very bits `flush` gives (NaN kept, −0 made +0), as an
+/// integer compare and a mask, which vectorise where the float compare and branch did not.
+#[inline(always)]
+pub(super) fn flush_bits(x: f32) -> f32 {
+    let keep = ((x.to_bits() & 0x7fff_ffff) >= crate::kernel::layout::FLUSH_BELOW.to_bits()) as u32;
+    f32::from_bits(x.to_bits() & keep.wrapping_neg())
 }
 
 /// [`choose_bits`] of two `f32`s: `a` where bit l of `m` is set, else `b`, the very bits.
@@ -413,5 +422,52 @@ mod tests {
     fn a_wrong_mask_is_caught() {
         let f: [bool; LANES] = std::array::from_fn(|l| l % 3 == 0);
         assert_ne!(mask_of(&f) ^ (1 << 5), by_lane(&f));
+    }
+
+    /// The first value where `f` differs in bits from the mirror's `flush`, over the
+    /// boundary's neighbourhood, zeros, infinities, NaNs and every exponent.
+    fn first_wrong_flush(f: impl Fn(f32) -> f32) -> Option<f32> {
+        let min = crate::kernel::layout::FLUSH_BELOW;
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            min,
+            -min,
+            f32::from_bits(min.to_bits() - 1),
+            f32::from_bits(min.to_bits() + 1),
+            f32::from_bits(1),
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::from_bits(0xffc0_0001),
+        ];
+        for e in 0..=255u32 {
+            for m in [0, 1, 0x40_0000, 0x7f_ffff] {
+                xs.push(f32::from_bits(e << 23 | m));
+                xs.push(f32::from_bits(1 << 31 | e << 23 | m));
+            }
+        }
+        xs.into_iter()
+            .find(|&x| f(x).to_bits() != crate::cpu::common::flush(x).to_bits())
+    }
+
+    /// `flush_bits` is the mirror's `flush`, bit for bit.
+    #[test]
+    fn flush_bits_is_the_mirrors_flush() {
+        assert_eq!(first_wrong_flush(flush_bits), None);
+    }
+
+    /// The twin: a flush that keeps the sign of a flushed value (−0 for a negative
+    /// subnormal) is caught.
+    #[test]
+    fn a_wrong_flush_is_caught() {
+        let signed = |x: f32| {
+            if x.abs() < crate::kernel::layout::FLUSH_BELOW {
+                0.0 * x.signum()
+            } else {
+                x
+            }
+        };
+        assert!(first_wrong_flush(signed).is_some());
     }
 }

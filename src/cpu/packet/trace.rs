@@ -6,7 +6,7 @@
 
 use super::common::{
     Build, LANES, Lanes, Mask, Origins, PACKET_W, PerLane, Shared, choose, choose_bits, dot_lane,
-    mask_of, normalize_lanes,
+    flush_bits, mask_of, normalize_lanes,
 };
 use super::prims::{
     ShearLanes, leaf_triangle, prim_lanes, prim_material, prim_normal, shear_lanes, sphere_lanes,
@@ -16,7 +16,7 @@ use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE,
     TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle,
 };
-use crate::cpu::common::{BVH_STACK, Globals, Hit, Ray, clamp01, flush, max0};
+use crate::cpu::common::{BVH_STACK, Globals, Hit, Ray, clamp01, max0};
 use crate::cpu::prims::{hit_prim, shading_at};
 use crate::cpu::trace::{
     finite_bound, nearer, phong_power, sample_offset, shadow_origin, tie_bound,
@@ -618,9 +618,9 @@ pub(super) fn trace_packet_body<B: Build>(g: &Globals<f32>, i: u32, j: u32) -> [
     let mut out = [[0.0f32; 4]; LANES];
     for l in 0..LANES {
         out[l] = [
-            flush(sum[l][0] / nn),
-            flush(sum[l][1] / nn),
-            flush(sum[l][2] / nn),
+            flush_bits(sum[l][0] / nn),
+            flush_bits(sum[l][1] / nn),
+            flush_bits(sum[l][2] / nn),
             t_near[l],
         ];
     }
@@ -805,7 +805,7 @@ pub(super) fn shade_lanes<B: Build>(
             n[2][l] = -n[2][l];
         }
         for k in 0..3 {
-            color[k][l] = flush(ambient[k] * ka[k][l]);
+            color[k][l] = flush_bits(ambient[k] * ka[k][l]);
         }
         diffuse_flags[l] = model[l] != MODEL_AMBIENT;
     }
@@ -864,11 +864,12 @@ pub(super) fn shade_lanes<B: Build>(
                 }
                 on &= !occluded_lanes::<B>(g, so, &sd, &skip, on);
             }
-            // Each lit lane's sum, chosen per lane (a select: the same value the branch gave).
+            // Each lit lane's sum, chosen per lane by bit selects (`choose`: the same value
+            // the branch gave; with the flush inside, LLVM made the branch a scalar loop).
             for c in 0..3 {
                 for l in 0..LANES {
-                    let lit = color[c][l] + flush(light_color[c] * kd[c][l] * ndl[l]);
-                    color[c][l] = if (on >> l) & 1 != 0 { lit } else { color[c][l] };
+                    let lit = color[c][l] + flush_bits(light_color[c] * kd[c][l] * ndl[l]);
+                    color[c][l] = choose(on, l, lit, color[c][l]);
                 }
             }
             let mut phong_flags = [false; LANES];
@@ -888,12 +889,8 @@ pub(super) fn shade_lanes<B: Build>(
                 let pw = phong_power_lanes(&rv, &mats, phong);
                 for c in 0..3 {
                     for l in 0..LANES {
-                        let lit = color[c][l] + flush(light_color[c] * ks[c][l] * pw[l]);
-                        color[c][l] = if (phong >> l) & 1 != 0 {
-                            lit
-                        } else {
-                            color[c][l]
-                        };
+                        let lit = color[c][l] + flush_bits(light_color[c] * ks[c][l] * pw[l]);
+                        color[c][l] = choose(phong, l, lit, color[c][l]);
                     }
                 }
             }
@@ -943,7 +940,7 @@ pub(super) fn phong_power_lanes(
         }
     }
     for l in 0..LANES {
-        result[l] = flush(result[l]);
+        result[l] = flush_bits(result[l]);
     }
     result
 }
