@@ -2,7 +2,8 @@
 # On whatever Vulkan adapter this machine has (a real GPU, or lavapipe): the GPU tests, then
 # the bench of the seed scenes, the dragon and the peers scenes on the shader (and on the
 # ray-query tracer where the adapter has ray queries), with the Mrays/s of each (primary
-# rays per second at the median frame), the acceleration-structure build apart.
+# rays per second at the median frame), the acceleration-structure build apart; then what
+# still differs from the CPU mirror (every seed scene and triangle algorithm, `glint compare`).
 #
 #     bash benches/gpu.sh [ADAPTER]      # ADAPTER: part of the adapter's name (default: the best)
 #
@@ -33,3 +34,18 @@ echo
 echo "| scene | tracer | median ms | Mrays/s | AS build ms | largest error vs f64 | hit/miss vs f64 | = CPU f32 |"
 echo "|---|---|---|---|---|---|---|---|"
 awk -F'|' 'NR > 4 && ($3 ~ /gpu|cpu-f32/) { printf "|%s|%s|%s|%s|%s|%s|%s|%s|\n", $2, $3, $8, $9, $12, $15, $18, $19 }' "$out/report.md"
+
+# What still differs from the CPU mirror on this driver (docs/exactness.md): `glint compare`
+# on every seed scene with every triangle algorithm, the counts of its "gpu vs cpu" line.
+echo
+echo "== GPU against the CPU mirror, 1024x768 ($(./target/release/glint adapters | grep -i -m1 -- "${GLINT_ADAPTER:-}" || true))"
+echo "| scene | triangles | pixels differing in some f32 bit | hit/miss | hits whose t differs | largest difference | in 8 bits |"
+echo "|---|---|---|---|---|---|---|"
+for s in sphere triangle umbrella bb8 mitsubishi bb8-shadows mitsubishi-shadows; do
+    for algo in naive moller-trumbore watertight; do
+        line="$(./target/release/glint compare "scenes/$s.toml" --size 1024x768 --triangle "$algo" \
+            --diff "$out/diff-$s-$algo.png" ${adapter:+--adapter "$adapter"} | grep '^gpu vs cpu')"
+        sed -E 's/^gpu vs cpu: [0-9]+ differing pixels \(8-bit\), ([0-9]+) differing in some f32 bit, ([0-9]+) hit\/miss disagreements, ([0-9]+) hits at a distance t that differs in some bit, largest channel difference ([^ ]+) \(([0-9]+) in 8 bits\).*/\1 | \2 | \3 | \4 | \5/' \
+            <<<"$line" | awk -v s="$s" -v a="$algo" '{print "| " s " | " a " | " $0 " |"}'
+    done
+done

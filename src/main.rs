@@ -393,6 +393,52 @@ unsafe impl std::alloc::GlobalAlloc for HugeBlocks {
 #[global_allocator]
 static ALLOCATOR: HugeBlocks = HugeBlocks;
 
+/// Asks Mesa not to print its conformance warning for lavapipe on every start, and gives
+/// this process (only) a runtime folder when `XDG_RUNTIME_DIR` is unset, so Mesa's window
+/// system code does not print "XDG_RUNTIME_DIR is invalid or not set" up to four times.
+/// Called first in `main`, before any thread exists (the library sets no variable).
+fn quiet_driver() {
+    if std::env::var_os("MESA_VK_IGNORE_CONFORMANCE_WARNING").is_none() {
+        // SAFETY: called at the start of `main`, before any other thread exists.
+        unsafe { std::env::set_var("MESA_VK_IGNORE_CONFORMANCE_WARNING", "1") };
+    }
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+        && let Some(dir) = private_runtime_dir()
+    {
+        // SAFETY: as above.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", dir) };
+    }
+}
+
+/// A folder only this user can enter, under the temporary folder, made when missing; None
+/// when it cannot be made or someone else owns it.
+#[cfg(unix)]
+fn private_runtime_dir() -> Option<std::path::PathBuf> {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+    let uid = std::fs::metadata("/proc/self").ok()?.uid();
+    let dir = std::env::temp_dir().join(format!("glint-runtime-{uid}"));
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    let m = std::fs::symlink_metadata(&dir).ok()?;
+    (m.is_dir() && m.uid() == uid && m.permissions().mode() & 0o077 == 0).then_some(dir)
+}
+
+#[cfg(not(unix))]
+fn private_runtime_dir() -> Option<std::path::PathBuf> {
+    None
+}
+
+/// The GPU settings for `--adapter NAME`, with what the environment adds, read here once:
+/// `GLINT_MAX_BUFFER_BYTES` (a smaller GPU's buffer limit) and `GLINT_TRAVERSAL=ray`.
+fn gpu_options(adapter: Option<&str>) -> glint::gpu::GpuOptions {
+    glint::gpu::GpuOptions {
+        adapter: adapter.map(str::to_string),
+        max_buffer_bytes: std::env::var("GLINT_MAX_BUFFER_BYTES")
+            .ok()
+            .and_then(|v| v.trim().parse::<u64>().ok()),
+        per_ray_traversal: std::env::var("GLINT_TRAVERSAL").as_deref() == Ok("ray"),
+    }
+}
+
 fn main() {
     // glibc raises its mmap threshold to the size of the largest block freed (up to 32 MiB),
     // after which a mesh's big vectors come from the heap, whose freed middle is never
@@ -403,6 +449,7 @@ fn main() {
     unsafe {
         libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
     }
+    quiet_driver();
     // SIGINT / SIGTERM: remove the half-written temporary image (the output file itself is
     // only ever replaced whole) and the cache entries' temporary files, then exit as
     // interrupted.
@@ -485,7 +532,8 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
             let spec = Specialisation::for_scene(&buf);
-            let renderer = glint::Renderer::with_adapter(backend.into(), adapter.as_deref())?;
+            let renderer =
+                glint::Renderer::with_options(backend.into(), &gpu_options(adapter.as_deref()))?;
             if let Some(note) = renderer.note() {
                 eprintln!("note: {note}");
             }
@@ -732,7 +780,7 @@ fn run(cli: Cli) -> Result<()> {
             check_memory(w, h, w as u64 * h as u64 * 16 * 4)?;
             let buf = SceneBuffers::new(&s, w, h, algo);
             let spec = Specialisation::for_scene(&buf);
-            let gpu = Gpu::new(adapter.as_deref())?;
+            let gpu = Gpu::with_options(&gpu_options(adapter.as_deref()))?;
             let (g, _) = gpu.compute_kernel(spec)?.render(
                 &gpu.device,
                 &gpu.queue,
@@ -839,7 +887,7 @@ fn bench(
     let gpu = if no_gpu {
         None
     } else {
-        Some(Gpu::new(adapter.as_deref())?)
+        Some(Gpu::with_options(&gpu_options(adapter.as_deref()))?)
     };
     let report = glint::bench::run(
         &list,

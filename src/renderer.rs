@@ -10,7 +10,7 @@
 //! ```
 
 use crate::buffers::{SceneBuffers, Specialisation};
-use crate::gpu::{Gpu, GpuError, is_cpu_adapter};
+use crate::gpu::{Gpu, GpuError, GpuOptions, is_cpu_adapter};
 use crate::image::Image;
 use crate::scene::{Scene, TriangleAlgorithm};
 
@@ -81,13 +81,19 @@ impl Renderer {
     /// A renderer on `backend`; for the GPU, the first adapter whose name contains
     /// `adapter` (case-insensitive). Naming an adapter makes `Auto` use it, CPU or not.
     pub fn with_adapter(backend: Backend, adapter: Option<&str>) -> Result<Renderer, RenderError> {
-        let gpu = |a| -> Result<Tracer, RenderError> { Ok(Tracer::Gpu(Box::new(Gpu::new(a)?))) };
+        Renderer::with_options(backend, &GpuOptions::adapter(adapter))
+    }
+
+    /// A renderer on `backend`, its device (if any) made as `options` say; naming an
+    /// adapter there makes `Auto` use it, CPU or not.
+    pub fn with_options(backend: Backend, options: &GpuOptions) -> Result<Renderer, RenderError> {
+        let adapter = options.adapter.as_deref();
         let (tracer, note) = match backend {
             Backend::Cpu => (Tracer::Cpu, None),
             Backend::CpuF64 => (Tracer::CpuF64, None),
-            Backend::Gpu => (gpu(adapter)?, None),
+            Backend::Gpu => (Tracer::Gpu(Box::new(Gpu::with_options(options)?)), None),
             Backend::GpuRq => {
-                let g = Gpu::new(adapter)?;
+                let g = Gpu::with_options(options)?;
                 g.ray_query_kernel()?;
                 (Tracer::GpuRq(Box::new(g)), None)
             }
@@ -117,7 +123,7 @@ impl Renderer {
                     )
                 } else {
                     // The list already enumerated: no second instance.
-                    let g = Gpu::from_adapters(list, adapter, t0)?;
+                    let g = Gpu::from_adapters(list, options, t0)?;
                     (Tracer::Gpu(Box::new(g)), None)
                 }
             }

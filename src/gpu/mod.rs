@@ -100,6 +100,8 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     /// The shader module and pipelines, with the per-ray traversal.
     pub kernel: Kernel,
+    /// The per-ray traversal only ([`GpuOptions::per_ray_traversal`]).
+    per_ray_traversal: bool,
     /// The packet traversal's kernel, made on first use ([`Gpu::packet_kernel`]).
     packet: OnceLock<Result<Option<Kernel>, GpuError>>,
     /// The ray-query tracer's kernel, made on first use ([`Gpu::ray_query_kernel`]).
@@ -137,7 +139,6 @@ pub fn mesa_version(driver_info: &str) -> Option<(u32, u32)> {
 /// The Vulkan adapters on this machine, best first: discrete GPU, integrated, virtual,
 /// then CPU implementations such as lavapipe.
 pub fn adapters() -> Vec<wgpu::Adapter> {
-    quiet_driver();
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
         backends: wgpu::Backends::VULKAN,
         ..wgpu::InstanceDescriptor::new_without_display_handle()
@@ -153,50 +154,35 @@ pub fn adapters() -> Vec<wgpu::Adapter> {
     list
 }
 
-/// Asks Mesa not to print its conformance warning for lavapipe on every start, and gives
-/// this process (only) a runtime folder when `XDG_RUNTIME_DIR` is unset, so Mesa's window
-/// system code does not print "XDG_RUNTIME_DIR is invalid or not set" up to four times.
-fn quiet_driver() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        if std::env::var_os("MESA_VK_IGNORE_CONFORMANCE_WARNING").is_none() {
-            // SAFETY: called once, before any Vulkan loader thread reads the environment.
-            unsafe { std::env::set_var("MESA_VK_IGNORE_CONFORMANCE_WARNING", "1") };
+/// How [`Gpu::with_options`] makes its device: settings as values (the command line reads
+/// them from the environment, once, in `main`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct GpuOptions {
+    /// The first adapter whose name contains this (case-insensitive); `None`: the best.
+    pub adapter: Option<String>,
+    /// The largest buffer the device may have, below the adapter's own limit: a smaller
+    /// GPU's limits on this one, so that the too-large path (the error naming the buffer,
+    /// and `auto`'s fall-back to the CPU) can be tried on any machine
+    /// (`GLINT_MAX_BUFFER_BYTES` on the command line).
+    pub max_buffer_bytes: Option<u64>,
+    /// The per-ray BVH traversal even where the device has subgroups for the packet one
+    /// (`GLINT_TRAVERSAL=ray` on the command line). The same image either way.
+    pub per_ray_traversal: bool,
+}
+
+impl GpuOptions {
+    /// The defaults with `adapter` picked by name.
+    pub fn adapter(name: Option<&str>) -> GpuOptions {
+        GpuOptions {
+            adapter: name.map(str::to_string),
+            ..GpuOptions::default()
         }
-        if std::env::var_os("XDG_RUNTIME_DIR").is_none()
-            && let Some(dir) = private_runtime_dir()
-        {
-            // SAFETY: as above.
-            unsafe { std::env::set_var("XDG_RUNTIME_DIR", dir) };
-        }
-    });
+    }
 }
 
-/// A folder only this user can enter, under the temporary folder, made when missing; None
-/// when it cannot be made or someone else owns it.
-#[cfg(unix)]
-fn private_runtime_dir() -> Option<std::path::PathBuf> {
-    use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
-    let uid = std::fs::metadata("/proc/self").ok()?.uid();
-    let dir = std::env::temp_dir().join(format!("glint-runtime-{uid}"));
-    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
-    let m = std::fs::symlink_metadata(&dir).ok()?;
-    (m.is_dir() && m.uid() == uid && m.permissions().mode() & 0o077 == 0).then_some(dir)
-}
-
-#[cfg(not(unix))]
-fn private_runtime_dir() -> Option<std::path::PathBuf> {
-    None
-}
-
-/// The adapter's limits, with the largest buffer capped at `GLINT_MAX_BUFFER_BYTES` when
-/// that is set: a smaller GPU's limits on this one, so that the too-large path (the error
-/// naming the buffer, and `auto`'s fall-back to the CPU) can be tried on any machine.
-fn capped_limits(mut l: wgpu::Limits) -> wgpu::Limits {
-    if let Some(cap) = std::env::var("GLINT_MAX_BUFFER_BYTES")
-        .ok()
-        .and_then(|v| v.trim().parse::<u64>().ok())
-    {
+/// The adapter's limits, with the largest buffer capped at `cap` when given.
+fn capped_limits(mut l: wgpu::Limits, cap: Option<u64>) -> wgpu::Limits {
+    if let Some(cap) = cap {
         l.max_buffer_size = l.max_buffer_size.min(cap);
         l.max_storage_buffer_binding_size = l.max_storage_buffer_binding_size.min(cap);
     }
@@ -209,20 +195,27 @@ pub fn is_cpu_adapter(info: &wgpu::AdapterInfo) -> bool {
 }
 
 impl Gpu {
-    /// Opens the best adapter, or the first whose name contains `name` (case-insensitive).
+    /// Opens the best adapter, or the first whose name contains `name` (case-insensitive),
+    /// with the default [`GpuOptions`].
     pub fn new(name: Option<&str>) -> Result<Gpu, GpuError> {
-        let t0 = Instant::now();
-        Gpu::from_adapters(adapters(), name, t0)
+        Gpu::with_options(&GpuOptions::adapter(name))
     }
 
-    /// [`Gpu::new`] from an adapter list already enumerated ([`adapters`], best first), so
-    /// a caller that looked at the list does not enumerate twice; `since` starts the clock
-    /// of `start_time`.
+    /// Opens the adapter `options` names (or the best) as `options` say.
+    pub fn with_options(options: &GpuOptions) -> Result<Gpu, GpuError> {
+        let t0 = Instant::now();
+        Gpu::from_adapters(adapters(), options, t0)
+    }
+
+    /// [`Gpu::with_options`] from an adapter list already enumerated ([`adapters`], best
+    /// first), so a caller that looked at the list does not enumerate twice; `since` starts
+    /// the clock of `start_time`.
     pub fn from_adapters(
         list: Vec<wgpu::Adapter>,
-        name: Option<&str>,
+        options: &GpuOptions,
         since: Instant,
     ) -> Result<Gpu, GpuError> {
+        let name = options.adapter.as_deref();
         let t0 = since;
         if list.is_empty() {
             return Err(GpuError::NoAdapter);
@@ -265,7 +258,7 @@ impl Gpu {
                 wgpu::ExperimentalFeatures::disabled()
             },
             // Everything the adapter offers: large scenes need its largest storage buffers.
-            required_limits: capped_limits(adapter.limits()),
+            required_limits: capped_limits(adapter.limits(), options.max_buffer_bytes),
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device {
@@ -275,6 +268,7 @@ impl Gpu {
         let start_time = t0.elapsed();
         Ok(Gpu {
             start_time,
+            per_ray_traversal: options.per_ray_traversal,
             ..Gpu::from_device(info, device, queue)?
         })
     }
@@ -292,6 +286,7 @@ impl Gpu {
             device,
             queue,
             kernel,
+            per_ray_traversal: false,
             packet: OnceLock::new(),
             ray_query: OnceLock::new(),
             start_time: Duration::ZERO,
@@ -312,14 +307,14 @@ impl Gpu {
         })
     }
 
-    /// The packet traversal's kernel where the device has subgroups and `GLINT_TRAVERSAL`
-    /// is not `ray`, else `None`; its shader module is made on the first call, so a
+    /// The packet traversal's kernel where the device has subgroups and the options did
+    /// not ask for the per-ray traversal, else `None`; its shader module is made on the first call, so a
     /// process that never traverses a BVH on the GPU does not pay for it.
     pub fn packet_kernel(&self) -> Result<Option<&Kernel>, GpuError> {
         self.packet
             .get_or_init(|| {
                 if self.device.features().contains(wgpu::Features::SUBGROUP)
-                    && std::env::var("GLINT_TRAVERSAL").as_deref() != Ok("ray")
+                    && !self.per_ray_traversal
                 {
                     Kernel::new_packet_with(&self.device, packet_shadows_pay(&self.info)).map(Some)
                 } else {

@@ -179,21 +179,22 @@ pub(super) fn mask_of(flags: &[bool; LANES]) -> Mask {
 /// was widened to sixteen bytes and multiplied back into bits. Every build gives the same
 /// mask (`<=` is false where either side is NaN, as `_CMP_LE_OQ` is).
 ///
-/// Private to the packet tracer: [`Avx2`] and [`Avx512`] run the instructions of their
-/// names, so they are used only inside the functions compiled for those features, which
-/// `tracer` calls only where the CPU has them (and in this file's tests, behind the same
-/// check).
-pub(super) trait Build {
+/// A value of a build is its proof that the CPU runs its instructions: [`Avx2`] and
+/// [`Avx512`] are made only by their `detect` (the CPU's own answer) or by an `unsafe`
+/// constructor whose caller vouches for the CPU, so safe code cannot run their
+/// instructions where the CPU lacks them.
+pub(super) trait Build: Copy {
     /// The lanes where `a[l] <= b[l]`.
-    fn le_mask(a: &[f32; LANES], b: &[f32; LANES]) -> Mask;
+    fn le_mask(self, a: &[f32; LANES], b: &[f32; LANES]) -> Mask;
 }
 
 /// The baseline build: `mask_of`.
+#[derive(Clone, Copy)]
 pub(super) struct Portable;
 
 impl Build for Portable {
     #[inline(always)]
-    fn le_mask(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
+    fn le_mask(self, a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
         let mut f = [false; LANES];
         for l in 0..LANES {
             f[l] = a[l] <= b[l];
@@ -202,16 +203,34 @@ impl Build for Portable {
     }
 }
 
-/// The AVX2 build: two eight-lane compares and their sign bits (`movmskps`).
+/// The AVX2 build: two eight-lane compares and their sign bits (`movmskps`). A value is
+/// the proof that the CPU has AVX2.
 #[cfg(target_arch = "x86_64")]
-pub(super) struct Avx2;
+#[derive(Clone, Copy)]
+pub(super) struct Avx2(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx2 {
+    /// The proof, where the CPU has AVX2.
+    pub(super) fn detect() -> Option<Avx2> {
+        std::arch::is_x86_feature_detected!("avx2").then_some(Avx2(()))
+    }
+
+    /// The proof, unchecked.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 (as inside a function compiled with that feature, which
+    /// itself may only run where the CPU has it).
+    pub(super) unsafe fn new_unchecked() -> Avx2 {
+        Avx2(())
+    }
+}
 
 #[cfg(target_arch = "x86_64")]
 impl Build for Avx2 {
     #[inline(always)]
-    fn le_mask(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
-        // SAFETY: used only in `trace_packet_avx2` (see `Build`), run only where the CPU
-        // has AVX2 (and in tests after that check).
+    fn le_mask(self, a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
+        // SAFETY: `self` proves that the CPU has AVX2.
         unsafe { le_mask_avx2(a, b) }
     }
 }
@@ -236,16 +255,38 @@ fn le_mask_avx2(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
     m
 }
 
-/// The AVX-512 build: one sixteen-lane compare into a mask register.
+/// The AVX-512 build: one sixteen-lane compare into a mask register. A value is the
+/// proof that the CPU has AVX-512 F.
 #[cfg(target_arch = "x86_64")]
-pub(super) struct Avx512;
+#[derive(Clone, Copy)]
+pub(super) struct Avx512(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx512 {
+    /// The proof, where the CPU has AVX-512 F, VL, BW and DQ (what the AVX-512 build of
+    /// the packet tracer is compiled for).
+    pub(super) fn detect() -> Option<Avx512> {
+        (std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+            && std::arch::is_x86_feature_detected!("avx512bw")
+            && std::arch::is_x86_feature_detected!("avx512dq"))
+        .then_some(Avx512(()))
+    }
+
+    /// The proof, unchecked.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512 F (as inside a function compiled with that feature).
+    pub(super) unsafe fn new_unchecked() -> Avx512 {
+        Avx512(())
+    }
+}
 
 #[cfg(target_arch = "x86_64")]
 impl Build for Avx512 {
     #[inline(always)]
-    fn le_mask(a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
-        // SAFETY: used only in `trace_packet_avx512` (see `Build`), run only where the CPU
-        // has AVX-512 F (and in tests after that check).
+    fn le_mask(self, a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
+        // SAFETY: `self` proves that the CPU has AVX-512 F.
         unsafe { le_mask_avx512(a, b) }
     }
 }
@@ -273,13 +314,18 @@ pub(super) fn choose_bits(m: Mask, l: usize, a: u32, b: u32) -> u32 {
     (a & sel) | (b & !sel)
 }
 
-/// The mirror's `flush` (WGSL `flush`) as bit operations: `x`, or +0 where |x| is below
-/// the smallest normal f32, the very bits `flush` gives (NaN kept, −0 made +0), as an
-/// integer compare and a mask, which vectorise where the float compare and branch did not.
+/// The mirror's `flush` (WGSL `flush`) of a value that is not negative (a shading term, a
+/// power, an average of colours), the very bits `flush` gives there (NaN kept, −0 made
+/// +0): one float compare and select, which vectorises as such (a compare of `abs`, or
+/// of the bits, measured slower in the packet's lane loops). Wrong for a negative value
+/// (it gives 0): the callers' values never are.
 #[inline(always)]
-pub(super) fn flush_bits(x: f32) -> f32 {
-    let keep = ((x.to_bits() & 0x7fff_ffff) >= crate::kernel::layout::FLUSH_BELOW.to_bits()) as u32;
-    f32::from_bits(x.to_bits() & keep.wrapping_neg())
+pub(super) fn flush_nonneg(x: f32) -> f32 {
+    if x < crate::kernel::layout::FLUSH_BELOW {
+        0.0
+    } else {
+        x
+    }
 }
 
 /// [`choose_bits`] of two `f32`s: `a` where bit l of `m` is set, else `b`, the very bits.
@@ -354,15 +400,15 @@ mod tests {
             let b: [f32; LANES] =
                 std::array::from_fn(|l| if l % 2 == 0 { x } else { vals[l % vals.len()] });
             let want = by_lane(&std::array::from_fn(|l| a[l] <= b[l]));
-            assert_eq!(Portable::le_mask(&a, &b), want);
+            assert_eq!(Portable.le_mask(&a, &b), want);
             #[cfg(target_arch = "x86_64")]
             {
-                if std::arch::is_x86_feature_detected!("avx2") {
-                    assert_eq!(Avx2::le_mask(&a, &b), want);
+                if let Some(avx2) = Avx2::detect() {
+                    assert_eq!(avx2.le_mask(&a, &b), want);
                     checks += 1;
                 }
-                if std::arch::is_x86_feature_detected!("avx512f") {
-                    assert_eq!(Avx512::le_mask(&a, &b), want);
+                if let Some(avx512) = Avx512::detect() {
+                    assert_eq!(avx512.le_mask(&a, &b), want);
                     checks += 1;
                 }
             }
@@ -425,49 +471,47 @@ mod tests {
     }
 
     /// The first value where `f` differs in bits from the mirror's `flush`, over the
-    /// boundary's neighbourhood, zeros, infinities, NaNs and every exponent.
+    /// boundary's neighbourhood, zeros, infinity, NaNs and every exponent: the values a
+    /// shading term can take (not negative, or NaN).
     fn first_wrong_flush(f: impl Fn(f32) -> f32) -> Option<f32> {
         let min = crate::kernel::layout::FLUSH_BELOW;
         let mut xs = vec![
             0.0,
             -0.0,
             min,
-            -min,
             f32::from_bits(min.to_bits() - 1),
             f32::from_bits(min.to_bits() + 1),
             f32::from_bits(1),
             f32::INFINITY,
-            f32::NEG_INFINITY,
             f32::NAN,
             f32::from_bits(0xffc0_0001),
         ];
         for e in 0..=255u32 {
             for m in [0, 1, 0x40_0000, 0x7f_ffff] {
                 xs.push(f32::from_bits(e << 23 | m));
-                xs.push(f32::from_bits(1 << 31 | e << 23 | m));
             }
         }
         xs.into_iter()
             .find(|&x| f(x).to_bits() != crate::cpu::common::flush(x).to_bits())
     }
 
-    /// `flush_bits` is the mirror's `flush`, bit for bit.
+    /// `flush_nonneg` is the mirror's `flush` on the values it is given, bit for bit.
     #[test]
-    fn flush_bits_is_the_mirrors_flush() {
-        assert_eq!(first_wrong_flush(flush_bits), None);
+    fn flush_nonneg_is_the_mirrors_flush() {
+        assert_eq!(first_wrong_flush(flush_nonneg), None);
     }
 
-    /// The twin: a flush that keeps the sign of a flushed value (−0 for a negative
-    /// subnormal) is caught.
+    /// The twin: a flush that compares with `<=` (flushing the smallest normal too) is
+    /// caught.
     #[test]
     fn a_wrong_flush_is_caught() {
-        let signed = |x: f32| {
-            if x.abs() < crate::kernel::layout::FLUSH_BELOW {
-                0.0 * x.signum()
+        let le = |x: f32| {
+            if x <= crate::kernel::layout::FLUSH_BELOW {
+                0.0
             } else {
                 x
             }
         };
-        assert!(first_wrong_flush(signed).is_some());
+        assert!(first_wrong_flush(le).is_some());
     }
 }

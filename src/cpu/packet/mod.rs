@@ -103,20 +103,25 @@ pub fn tracer(simd: Simd) -> PacketFn {
     let _ = simd;
     #[cfg(target_arch = "x86_64")]
     match simd.name() {
-        // SAFETY: `name` said the CPU has AVX-512 F, VL, BW and DQ.
-        "avx512" => return |g, i, j| unsafe { trace_packet_avx512(g, i, j) },
-        // SAFETY: `name` said the CPU has AVX2.
-        "avx2" => return |g, i, j| unsafe { trace_packet_avx2(g, i, j) },
+        // SAFETY: the token's detection said the CPU has AVX-512 F, VL, BW and DQ.
+        "avx512" if Avx512::detect().is_some() => {
+            return |g, i, j| unsafe { trace_packet_avx512(g, i, j) };
+        }
+        // SAFETY: the token's detection said the CPU has AVX2.
+        "avx2" if Avx2::detect().is_some() => {
+            return |g, i, j| unsafe { trace_packet_avx2(g, i, j) };
+        }
         _ => {}
     }
-    trace_packet_body::<Portable>
+    |g, i, j| trace_packet_body(Portable, g, i, j)
 }
 
 /// `trace_packet` compiled for AVX2: a lane loop is two eight-wide vectors.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn trace_packet_avx2(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
-    trace_packet_body::<Avx2>(g, i, j)
+    // SAFETY: this function is compiled for AVX2 and runs only where the CPU has it.
+    trace_packet_body(unsafe { Avx2::new_unchecked() }, g, i, j)
 }
 
 /// `trace_packet` compiled for AVX-512: a lane loop is one sixteen-wide vector, and lane
@@ -124,5 +129,6 @@ unsafe fn trace_packet_avx2(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANE
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
 unsafe fn trace_packet_avx512(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
-    trace_packet_body::<Avx512>(g, i, j)
+    // SAFETY: this function is compiled for AVX-512 F and runs only where the CPU has it.
+    trace_packet_body(unsafe { Avx512::new_unchecked() }, g, i, j)
 }

@@ -6,7 +6,7 @@
 
 use super::common::{
     Build, LANES, Lanes, Mask, Origins, PACKET_W, PerLane, Shared, choose, choose_bits, dot_lane,
-    flush_bits, mask_of, normalize_lanes,
+    flush_nonneg, mask_of, normalize_lanes,
 };
 use super::prims::{
     ShearLanes, leaf_triangle, prim_lanes, prim_material, prim_normal, shear_lanes, sphere_lanes,
@@ -35,6 +35,7 @@ use crate::kernel::real::V3;
 /// `node`'s box must have lo <= hi on every axis, as every box the builder makes has.
 #[inline(always)]
 pub(super) fn box_lanes<B: Build, O: Origins>(
+    b: B,
     node: &BvhNode,
     r: &Lanes<O>,
     t_min: f32,
@@ -60,7 +61,7 @@ pub(super) fn box_lanes<B: Build, O: Origins>(
             let far = [f[0] * r.ix[l], f[1] * r.iy[l], f[2] * r.iz[l]];
             (near_out[l], far_out[l]) = clip_interval(near, far, t_min, bound[l]);
         }
-        return B::le_mask(near_out, &far_out);
+        return b.le_mask(near_out, &far_out);
     }
     for l in 0..LANES {
         let lo = r.origin.rel(&node.lo, l);
@@ -80,7 +81,7 @@ pub(super) fn box_lanes<B: Build, O: Origins>(
         let fz = if sz { lz } else { hz };
         (near_out[l], far_out[l]) = clip_interval([nx, ny, nz], [fx, fy, fz], t_min, bound[l]);
     }
-    B::le_mask(near_out, &far_out)
+    b.le_mask(near_out, &far_out)
 }
 
 /// The end of `box_interval` for one lane, from its slabs' near and far distances: (t_min,
@@ -240,6 +241,7 @@ impl PacketHits {
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn descend<B: Build, O: Origins>(
+    b: B,
     g: &Globals<f32>,
     at: u32,
     node: &BvhNode,
@@ -254,8 +256,8 @@ pub(super) fn descend<B: Build, O: Origins>(
     let (left, right) = (&nodes[at as usize + 1], &nodes[node.first as usize]);
     // The entry distances are not needed here (the order comes from the split axis).
     let mut near = [0.0f32; LANES];
-    let ml = box_lanes::<B, O>(left, r, t_min, bound, &mut near) & lanes;
-    let mr = box_lanes::<B, O>(right, r, t_min, bound, &mut near) & lanes;
+    let ml = box_lanes::<B, O>(b, left, r, t_min, bound, &mut near) & lanes;
+    let mr = box_lanes::<B, O>(b, right, r, t_min, bound, &mut near) & lanes;
     if ml != 0 && mr != 0 {
         // The nearer child by the split axis and the direction of the first lane that
         // enters either: the left child holds the lower centres on that axis, so a ray
@@ -355,6 +357,7 @@ fn blocking_lanes(
 /// answer is the same, whatever order the packet takes.
 #[inline(always)]
 pub(super) fn occluded_lanes<B: Build>(
+    b: B,
     g: &Globals<f32>,
     o: [[f32; LANES]; 3],
     d: &[[f32; LANES]; 3],
@@ -401,7 +404,7 @@ pub(super) fn occluded_lanes<B: Build>(
         return 0;
     }
     let mut near = [0.0f32; LANES];
-    let mut lanes = box_lanes::<B, _>(&nodes[0], &r, t_min, &bound, &mut near) & mask;
+    let mut lanes = box_lanes::<B, _>(b, &nodes[0], &r, t_min, &bound, &mut near) & mask;
     let mut stack = [(0u32, 0 as Mask); BVH_STACK];
     let mut sp = 0usize;
     let mut at = 0u32;
@@ -411,8 +414,9 @@ pub(super) fn occluded_lanes<B: Build>(
             let node = &nodes[at as usize];
             let count = node.count_axis >> 2;
             if count == 0 {
-                let next =
-                    descend::<B, _>(g, at, node, &r, t_min, &bound, lanes, &mut stack, &mut sp);
+                let next = descend::<B, _>(
+                    b, g, at, node, &r, t_min, &bound, lanes, &mut stack, &mut sp,
+                );
                 if let Some(next) = next {
                     (at, lanes) = next;
                     continue;
@@ -446,6 +450,7 @@ pub(super) fn occluded_lanes<B: Build>(
 /// be finite (`finite_bound`), as `closest_hit` passes it.
 #[inline(always)]
 pub(super) fn closest_hit_packet<B: Build>(
+    b: B,
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
     dir: &[[f32; LANES]; 3],
@@ -476,7 +481,7 @@ pub(super) fn closest_hit_packet<B: Build>(
     }
     let mut near = [0.0f32; LANES];
     let mut bound = [t_max; LANES];
-    let mut mask = box_lanes::<B, _>(&nodes[0], &r, t_min, &bound, &mut near) & active;
+    let mut mask = box_lanes::<B, _>(b, &nodes[0], &r, t_min, &bound, &mut near) & active;
     if mask == 0 {
         return out;
     }
@@ -492,7 +497,8 @@ pub(super) fn closest_hit_packet<B: Build>(
         let node = &nodes[at as usize];
         let count = node.count_axis >> 2;
         if count == 0 {
-            let next = descend::<B, _>(g, at, node, &r, t_min, &bound, mask, &mut stack, &mut sp);
+            let next =
+                descend::<B, _>(b, g, at, node, &r, t_min, &bound, mask, &mut stack, &mut sp);
             if let Some(next) = next {
                 (at, mask) = next;
                 continue;
@@ -591,10 +597,15 @@ pub fn camera_rays(
 /// pixels at the same point of their pixel (as coherent as the block itself), the lanes
 /// summing their samples in `trace_pixel`'s order.
 #[inline(always)]
-pub(super) fn trace_packet_body<B: Build>(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
+pub(super) fn trace_packet_body<B: Build>(
+    b: B,
+    g: &Globals<f32>,
+    i: u32,
+    j: u32,
+) -> [[f32; 4]; LANES] {
     let half = 1.0f32 / (1.0 + 1.0);
     if !g.spec.antialias {
-        return sample_packet::<B>(g, i, j, half, half);
+        return sample_packet::<B>(b, g, i, j, half, half);
     }
     let n = g.cam.samples;
     let mut sum = [[0.0f32; 3]; LANES];
@@ -603,7 +614,7 @@ pub(super) fn trace_packet_body<B: Build>(g: &Globals<f32>, i: u32, j: u32) -> [
         let dy = sample_offset::<f32>(sy, n);
         for sx in 0..n {
             let dx = sample_offset::<f32>(sx, n);
-            let s = sample_packet::<B>(g, i, j, dx, dy);
+            let s = sample_packet::<B>(b, g, i, j, dx, dy);
             for l in 0..LANES {
                 for c in 0..3 {
                     sum[l][c] += s[l][c];
@@ -618,9 +629,9 @@ pub(super) fn trace_packet_body<B: Build>(g: &Globals<f32>, i: u32, j: u32) -> [
     let mut out = [[0.0f32; 4]; LANES];
     for l in 0..LANES {
         out[l] = [
-            flush_bits(sum[l][0] / nn),
-            flush_bits(sum[l][1] / nn),
-            flush_bits(sum[l][2] / nn),
+            flush_nonneg(sum[l][0] / nn),
+            flush_nonneg(sum[l][1] / nn),
+            flush_nonneg(sum[l][2] / nn),
             t_near[l],
         ];
     }
@@ -630,6 +641,7 @@ pub(super) fn trace_packet_body<B: Build>(g: &Globals<f32>, i: u32, j: u32) -> [
 /// `trace_sample` at the point (dx, dy) of each pixel of the block.
 #[inline(always)]
 pub(super) fn sample_packet<B: Build>(
+    b: B,
     g: &Globals<f32>,
     i: u32,
     j: u32,
@@ -637,13 +649,13 @@ pub(super) fn sample_packet<B: Build>(
     dy: f32,
 ) -> [[f32; 4]; LANES] {
     let (rays, dir, active) = camera_rays(g, i, j, dx, dy);
-    let found = closest_hit_packet::<B>(g, &rays, &dir, active, 0.0, f32::MAX);
+    let found = closest_hit_packet::<B>(b, g, &rays, &dir, active, 0.0, f32::MAX);
     let mut hit = [false; LANES];
     for l in 0..LANES {
         hit[l] = found.prim[l] != PRIM_NONE;
     }
     let lit = mask_of(&hit);
-    let colors = shade_lanes::<B>(g, &dir, &found, lit & active);
+    let colors = shade_lanes::<B>(b, g, &dir, &found, lit & active);
     // Loops, not `array::from_fn`: that is a generic function of its own, compiled once
     // for the baseline instruction set and called from every build.
     let bg = g.buf.params.background;
@@ -665,6 +677,7 @@ pub(super) fn sample_packet<B: Build>(
 /// the primitive of lane `mask`'s first lane.
 #[inline(always)]
 pub(super) fn shade_lanes<B: Build>(
+    b: B,
     g: &Globals<f32>,
     dir: &[[f32; LANES]; 3],
     found: &PacketHits,
@@ -805,7 +818,7 @@ pub(super) fn shade_lanes<B: Build>(
             n[2][l] = -n[2][l];
         }
         for k in 0..3 {
-            color[k][l] = flush_bits(ambient[k] * ka[k][l]);
+            color[k][l] = flush_nonneg(ambient[k] * ka[k][l]);
         }
         diffuse_flags[l] = model[l] != MODEL_AMBIENT;
     }
@@ -862,13 +875,13 @@ pub(super) fn shade_lanes<B: Build>(
                     [sd[0][l], sd[1][l], sd[2][l]] = [d.x, d.y, d.z];
                     skip[l] = found.prim[l];
                 }
-                on &= !occluded_lanes::<B>(g, so, &sd, &skip, on);
+                on &= !occluded_lanes::<B>(b, g, so, &sd, &skip, on);
             }
             // Each lit lane's sum, chosen per lane by bit selects (`choose`: the same value
             // the branch gave; with the flush inside, LLVM made the branch a scalar loop).
             for c in 0..3 {
                 for l in 0..LANES {
-                    let lit = color[c][l] + flush_bits(light_color[c] * kd[c][l] * ndl[l]);
+                    let lit = color[c][l] + flush_nonneg(light_color[c] * kd[c][l] * ndl[l]);
                     color[c][l] = choose(on, l, lit, color[c][l]);
                 }
             }
@@ -889,7 +902,8 @@ pub(super) fn shade_lanes<B: Build>(
                 let pw = phong_power_lanes(&rv, &mats, phong);
                 for c in 0..3 {
                     for l in 0..LANES {
-                        let lit = color[c][l] + flush_bits(light_color[c] * ks[c][l] * pw[l]);
+                        let lit = color[c][l]
+                            + flush_nonneg(light_color[c] * ks[c][l] * flush_nonneg(pw[l]));
                         color[c][l] = choose(phong, l, lit, color[c][l]);
                     }
                 }
@@ -905,8 +919,9 @@ pub(super) fn shade_lanes<B: Build>(
 }
 
 /// `phong_power` of every lane in `mask`: integer exponents by squaring as lane loops (a
-/// lane whose exponent is spent multiplies no further, as the scalar loop stops), then
-/// flushed as the scalar one is; other exponents through `phong_power` itself.
+/// lane whose exponent is spent multiplies no further, as the scalar loop stops), not yet
+/// flushed (the caller flushes each lane where it reads it, as the scalar `phong_power`
+/// flushes its result); other exponents through `phong_power` itself.
 #[inline(always)]
 pub(super) fn phong_power_lanes(
     base: &[f32; LANES],
@@ -939,9 +954,6 @@ pub(super) fn phong_power_lanes(
             e[l] >>= 1;
         }
     }
-    for l in 0..LANES {
-        result[l] = flush_bits(result[l]);
-    }
     result
 }
 
@@ -961,9 +973,9 @@ mod tests {
     ) {
         assert!(r.neg.is_some(), "case {case}: a uniform-sign packet");
         let (mut a, mut b) = ([0.0f32; LANES], [0.0f32; LANES]);
-        let ma = box_lanes::<Portable, O>(node, &r, t_min, bound, &mut a);
+        let ma = box_lanes::<Portable, O>(Portable, node, &r, t_min, bound, &mut a);
         r.neg = None;
-        let mb = box_lanes::<Portable, O>(node, &r, t_min, bound, &mut b);
+        let mb = box_lanes::<Portable, O>(Portable, node, &r, t_min, bound, &mut b);
         assert_eq!(ma, mb, "case {case}: mask");
         assert_eq!(
             a.map(f32::to_bits),
