@@ -29,12 +29,36 @@ const CODE: &[&[u8]] = &[
 /// First bytes of every entry (the last one is the format's version).
 const MAGIC: &[u8; 8] = b"glintc\0\x01";
 
-/// Default size limit of the folder, MiB (`GLINT_CACHE_MIB` changes it).
-const DEFAULT_MIB: u64 = 2048;
+/// Default size limit of the folder, MiB (`glint render` reads `GLINT_CACHE_MIB`).
+pub const DEFAULT_MIB: u64 = 2048;
 
-/// Default least number of primitives worth an entry (`GLINT_CACHE_MIN_PRIMS` changes it):
-/// below it, the work takes a few milliseconds and an entry would only take disk.
-const DEFAULT_MIN_PRIMS: usize = 100_000;
+/// Default least number of primitives worth an entry (`glint render` reads
+/// `GLINT_CACHE_MIN_PRIMS`): below it, the work takes a few milliseconds and an entry
+/// would only take disk.
+pub const DEFAULT_MIN_PRIMS: usize = 100_000;
+
+/// Where the cache keeps its entries and how much: a value the program makes (the command
+/// line from its flags and environment) and hands to [`enable`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Settings {
+    /// The folder.
+    pub dir: PathBuf,
+    /// The folder's size limit in bytes: the least recently used entries go beyond it.
+    pub max_bytes: u64,
+    /// The least number of primitives a value must be made from to be worth an entry.
+    pub min_prims: usize,
+}
+
+impl Settings {
+    /// `dir` with the default limits.
+    pub fn new(dir: PathBuf) -> Settings {
+        Settings {
+            dir,
+            max_bytes: DEFAULT_MIB << 20,
+            min_prims: DEFAULT_MIN_PRIMS,
+        }
+    }
+}
 
 /// How old a temporary file in the folder must be for a prune to take it for one that a
 /// killed process left (a live writer renames its file within seconds).
@@ -43,8 +67,8 @@ pub const STALE_TEMP: std::time::Duration = std::time::Duration::from_secs(3600)
 /// The temporary files being written now ([`remove_pending_temps`]).
 static TEMPS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-/// The folder, once [`enable`]d.
-static DIR: Mutex<Option<PathBuf>> = Mutex::new(None);
+/// The settings, once [`enable`]d.
+static SETTINGS: Mutex<Option<Settings>> = Mutex::new(None);
 
 /// What the cache did during this process, for `glint render -v` and the tests.
 static EVENTS: Mutex<Vec<String>> = Mutex::new(Vec::new());
@@ -88,14 +112,19 @@ pub fn default_dir() -> Option<PathBuf> {
         .or_else(|| var("HOME").map(|d| d.join(".cache").join("glint")))
 }
 
-/// Turns the cache on, in `dir`.
-pub fn enable(dir: PathBuf) {
-    *DIR.lock().unwrap_or_else(|e| e.into_inner()) = Some(dir);
+/// Turns the cache on, as `settings` say.
+pub fn enable(settings: Settings) {
+    *SETTINGS.lock().unwrap_or_else(|e| e.into_inner()) = Some(settings);
 }
 
 /// Turns the cache off.
 pub fn disable() {
-    *DIR.lock().unwrap_or_else(|e| e.into_inner()) = None;
+    *SETTINGS.lock().unwrap_or_else(|e| e.into_inner()) = None;
+}
+
+/// The settings while the cache is on.
+fn settings() -> Option<Settings> {
+    SETTINGS.lock().unwrap_or_else(|e| e.into_inner()).clone()
 }
 
 /// Whether the cache is on (so a key is worth computing).
@@ -104,13 +133,9 @@ pub fn enabled() -> bool {
 }
 
 /// Whether a value made from `primitives` primitives is worth an entry (the cache is on
-/// and the count reaches `GLINT_CACHE_MIN_PRIMS`, default 100,000).
+/// and the count reaches [`Settings::min_prims`]).
 pub fn worth(primitives: usize) -> bool {
-    let min = std::env::var("GLINT_CACHE_MIN_PRIMS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(DEFAULT_MIN_PRIMS);
-    enabled() && primitives >= min
+    settings().is_some_and(|s| primitives >= s.min_prims)
 }
 
 /// What the cache did so far in this process ("hit mesh", "stored bvh", warnings), and
@@ -171,7 +196,7 @@ fn event(e: String) {
 }
 
 fn dir() -> Option<PathBuf> {
-    DIR.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    settings().map(|s| s.dir)
 }
 
 /// The entry of `key`, as the sections it was stored with; `None` when the cache is off,
@@ -304,13 +329,9 @@ pub fn remove_pending_temps() {
     }
 }
 
-/// The folder's size limit: `GLINT_CACHE_MIB` (default 2048) MiB.
+/// The folder's size limit ([`Settings::max_bytes`]; the default when the cache is off).
 fn limit_bytes() -> u64 {
-    std::env::var("GLINT_CACHE_MIB")
-        .ok()
-        .and_then(|v| v.parse::<u64>().ok())
-        .unwrap_or(DEFAULT_MIB)
-        << 20
+    settings().map_or(DEFAULT_MIB << 20, |s| s.max_bytes)
 }
 
 /// Deletes the least recently used entries while the folder's entries exceed `limit`
@@ -367,7 +388,7 @@ mod tests {
     fn entries_round_trip_and_damage_is_caught() {
         let dir = std::env::temp_dir().join(format!("glint-cache-unit-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
-        enable(dir.clone());
+        enable(Settings::new(dir.clone()));
         let key = Key::new("test", &[b"abc"]);
         assert_ne!(key, Key::new("test", &[b"abd"]), "the key sees its input");
         assert_ne!(key, Key::new("test", &[b"ab", b"c"]), "parts are delimited");

@@ -293,16 +293,19 @@ impl Image {
     }
 
     /// Reads an image glint wrote: an EXR exactly (t from A), a PNG as 8-bit colours
-    /// divided by 255 with t = 0 for every pixel (a PNG has no hit distances).
+    /// divided by 255 with t = 0 for every pixel (a PNG has no hit distances). At most the
+    /// default input limit is read ([`crate::scene::LoadOptions`]).
     pub fn load(path: &Path) -> Result<Image, ImageError> {
+        Image::load_limited(path, crate::scene::LoadOptions::default().max_input_bytes)
+    }
+
+    /// [`Image::load`] reading at most `limit` bytes.
+    pub fn load_limited(path: &Path, limit: u64) -> Result<Image, ImageError> {
         let format = format_of(path)?;
-        let bytes =
-            crate::scene::read_limited(path, crate::scene::max_input_bytes()).map_err(|e| {
-                ImageError::Decode {
-                    path: path.to_owned(),
-                    message: e.to_string(),
-                }
-            })?;
+        let bytes = crate::scene::read_limited(path, limit).map_err(|e| ImageError::Decode {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
         let decode = |message: String| ImageError::Decode {
             path: path.to_owned(),
             message,

@@ -217,12 +217,24 @@ impl ProgressBar {
     }
 }
 
+/// The most bytes read from one input: `GLINT_MAX_INPUT_MIB` (MiB) when set to a number,
+/// else the library's default; read here, once.
+fn max_input_bytes() -> u64 {
+    std::env::var("GLINT_MAX_INPUT_MIB")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .map_or(
+            glint::scene::LoadOptions::default().max_input_bytes,
+            |mib| mib.saturating_mul(1 << 20),
+        )
+}
+
 fn load(scene: &Path, confine: bool) -> Result<Scene> {
-    let s = if confine {
-        Scene::load_confined(scene)?
-    } else {
-        Scene::load(scene)?
+    let options = glint::scene::LoadOptions {
+        max_input_bytes: max_input_bytes(),
+        confine,
     };
+    let s = Scene::load_with(scene, &options)?;
     for w in &s.warnings {
         eprintln!("warning: {w}");
     }
@@ -439,6 +451,24 @@ fn gpu_options(adapter: Option<&str>) -> glint::gpu::GpuOptions {
     }
 }
 
+/// The cache's settings for `dir`, with what the environment adds, read here once:
+/// `GLINT_CACHE_MIB` (the folder's size limit) and `GLINT_CACHE_MIN_PRIMS`.
+fn cache_settings(dir: std::path::PathBuf) -> glint::cache::Settings {
+    let var = |k: &str| {
+        std::env::var(k)
+            .ok()
+            .and_then(|v| v.trim().parse::<u64>().ok())
+    };
+    let mut s = glint::cache::Settings::new(dir);
+    if let Some(mib) = var("GLINT_CACHE_MIB") {
+        s.max_bytes = mib.saturating_mul(1 << 20);
+    }
+    if let Some(n) = var("GLINT_CACHE_MIN_PRIMS") {
+        s.min_prims = n as usize;
+    }
+    s
+}
+
 fn main() {
     // glibc raises its mmap threshold to the size of the largest block freed (up to 32 MiB),
     // after which a mesh's big vectors come from the heap, whose freed middle is never
@@ -485,7 +515,7 @@ fn run(cli: Cli) -> Result<()> {
             common: CommonArgs { adapter, confine },
         } => {
             if let Some(dir) = glint::cache::default_dir().filter(|_| !no_cache) {
-                glint::cache::enable(dir);
+                glint::cache::enable(cache_settings(dir));
                 // `main` waits for the writes before the process ends.
                 glint::cache::write_behind(true);
             }
@@ -694,8 +724,8 @@ fn run(cli: Cli) -> Result<()> {
         Command::Diff { a, b, diff } => {
             glint::image::check_extension(&diff)?;
             let (x, y) = (
-                glint::image::Image::load(&a)?,
-                glint::image::Image::load(&b)?,
+                glint::image::Image::load_limited(&a, max_input_bytes())?,
+                glint::image::Image::load_limited(&b, max_input_bytes())?,
             );
             if (x.width, x.height) != (y.width, y.height) {
                 bail!(

@@ -178,15 +178,7 @@ pub(super) fn load(
             (normals == Normals::Read) as u8,
             obj_path.extension().is_some_and(|e| e == "gz") as u8,
         ];
-        crate::cache::Key::new(
-            "mesh",
-            &[
-                &raw,
-                &xf_bits,
-                &settings,
-                &super::max_input_bytes().to_le_bytes(),
-            ],
-        )
+        crate::cache::Key::new("mesh", &[&raw, &xf_bits, &settings, &v.limit.to_le_bytes()])
     });
     if let (Some(name), Some(ckey)) = (&m.material, &cache_key)
         && let Some(entry) = crate::stages::time("cache read", || CachedMesh::load(ckey))
@@ -221,11 +213,11 @@ pub(super) fn load(
     // where that does not apply (see there) it is gunzipped whole, then parsed.
     let is_gz = obj_path.extension().is_some_and(|e| e == "gz");
     let early = (m.material.is_some() && is_gz)
-        .then(|| gunzip_parse(&raw, normals, GUNZIP_PIECE))
+        .then(|| gunzip_parse(&raw, normals, GUNZIP_PIECE, v.limit))
         .flatten();
     let (mut bytes, mut early) = match early {
         Some((bytes, parsed)) => (bytes, Some(parsed)),
-        None => (gunzip(&obj_path, raw).map_err(&fail)?, None),
+        None => (gunzip(&obj_path, raw, v.limit).map_err(&fail)?, None),
     };
     let t_check = std::time::Instant::now();
     // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
@@ -638,12 +630,12 @@ impl CachedMesh {
     }
 }
 
-/// The bytes of an OBJ file as read (`raw`), gunzipped when the name ends in `.gz`.
-fn gunzip(path: &Path, raw: Vec<u8>) -> Result<Vec<u8>, String> {
+/// The bytes of an OBJ file as read (`raw`), gunzipped (at most `limit` bytes) when the
+/// name ends in `.gz`.
+fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, String> {
     let _gunzip = Gunzip(std::time::Instant::now());
     if path.extension().is_some_and(|e| e == "gz") {
         use std::io::Read;
-        let limit = super::max_input_bytes();
         let mut out = Vec::new();
         let mut dec = flate2::read::GzDecoder::new(&raw[..]).take(limit + 1);
         // Inflated a block at a time and watched for what no OBJ has (a NUL byte, a line
@@ -706,13 +698,18 @@ const _: () = assert!(GUNZIP_BLOCK <= super::obj::MAX_LINE_BYTES);
 /// input limit, or not the size inflated (a multi-member or damaged file); the inflate
 /// fails; a piece is not UTF-8; the text starts with a byte-order mark.
 /// Stages: "gunzip" is the time spent inflating, "OBJ parse" the wait after it.
-fn gunzip_parse(raw: &[u8], normals: Normals, piece: usize) -> Option<(Vec<u8>, ObjParse)> {
+fn gunzip_parse(
+    raw: &[u8],
+    normals: Normals,
+    piece: usize,
+    limit: u64,
+) -> Option<(Vec<u8>, ObjParse)> {
     use std::io::Read;
     use std::sync::Mutex;
     let t0 = std::time::Instant::now();
     let isize_bytes: [u8; 4] = raw.get(raw.len().checked_sub(4)?..)?.try_into().ok()?;
     let size = u32::from_le_bytes(isize_bytes) as usize;
-    if size == 0 || size as u64 > super::max_input_bytes() {
+    if size == 0 || size as u64 > limit {
         return None;
     }
     let mut buf = vec![0u8; size];
@@ -871,7 +868,8 @@ mod tests {
             let whole = obj::parse(&text, normals);
             assert!(matches!(whole, Ok(Some(_))), "{}", shown(&whole));
             for piece in [1, 7, 100, 4096, 1 << 20] {
-                let (bytes, parsed) = gunzip_parse(&gzipped, normals, piece).expect("streamed");
+                let (bytes, parsed) =
+                    gunzip_parse(&gzipped, normals, piece, 1 << 30).expect("streamed");
                 assert_eq!(bytes, text.as_bytes(), "piece {piece}");
                 assert_eq!(shown(&parsed), shown(&whole), "piece {piece}");
             }
@@ -893,7 +891,8 @@ mod tests {
             let whole = obj::parse(&text, Normals::Skip);
             assert!(!matches!(whole, Ok(Some(_))));
             for piece in [1, 100, 1 << 20] {
-                let (_, parsed) = gunzip_parse(&gz(text.as_bytes()), Normals::Skip, piece).unwrap();
+                let (_, parsed) =
+                    gunzip_parse(&gz(text.as_bytes()), Normals::Skip, piece, 1 << 30).unwrap();
                 assert_eq!(shown(&parsed), shown(&whole), "piece {piece}");
             }
         }
@@ -910,7 +909,7 @@ mod tests {
             let size = u32::from_le_bytes(lying[n - 4..].try_into().unwrap());
             lying[n - 4..].copy_from_slice(&size.wrapping_add(delta).to_le_bytes());
             assert!(
-                gunzip_parse(&lying, Normals::Skip, 100).is_none(),
+                gunzip_parse(&lying, Normals::Skip, 100, 1 << 30).is_none(),
                 "{delta}"
             );
         }
@@ -929,7 +928,10 @@ mod tests {
             ("empty", gz(b"")),
             ("short", vec![0x1f, 0x8b]),
         ] {
-            assert!(gunzip_parse(&raw, Normals::Skip, 100).is_none(), "{what}");
+            assert!(
+                gunzip_parse(&raw, Normals::Skip, 100, 1 << 30).is_none(),
+                "{what}"
+            );
         }
     }
 

@@ -199,17 +199,55 @@ pub struct Scene {
     pub triangle_sources: Vec<(usize, String)>,
 }
 
+/// How a scene is read: settings as values (the command line makes them from its flags and
+/// environment).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// The most bytes read from one input file, and unpacked from one `.gz`
+    /// ([`DEFAULT_MAX_INPUT_MIB`] MiB by default; `GLINT_MAX_INPUT_MIB` on the command
+    /// line). It keeps `/dev/zero`, `/dev/urandom` or a gzip bomb from filling memory.
+    pub max_input_bytes: u64,
+    /// Read only files below the scene's own folder (after following symbolic links); a
+    /// mesh or MTL anywhere else is an error naming it.
+    pub confine: bool,
+}
+
+impl Default for LoadOptions {
+    fn default() -> LoadOptions {
+        LoadOptions {
+            max_input_bytes: DEFAULT_MAX_INPUT_MIB << 20,
+            confine: false,
+        }
+    }
+}
+
 impl Scene {
-    /// Reads and validates the scene file at `path` (meshes relative to it).
+    /// Reads and validates the scene file at `path` (meshes relative to it), with the
+    /// default [`LoadOptions`].
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
-        let path = path.as_ref();
-        Scene::parse(&read_scene_text(path)?, path)
+        Scene::load_with(path, &LoadOptions::default())
     }
 
-    /// [`Scene::load`] in confined mode: the scene may read only files below its own folder
-    /// (after following symbolic links); a mesh or MTL anywhere else is an error naming it.
+    /// [`Scene::load`] in confined mode ([`LoadOptions::confine`]).
     pub fn load_confined(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        Scene::load_with(
+            path,
+            &LoadOptions {
+                confine: true,
+                ..LoadOptions::default()
+            },
+        )
+    }
+
+    /// Reads and validates the scene file at `path` as `options` say.
+    pub fn load_with(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Scene, SceneError> {
         let path = path.as_ref();
+        let limit = options.max_input_bytes;
+        let text = read_scene_text(path, limit)?;
+        if !options.confine {
+            let read = move |p: &Path| read_from_disk_limited(p, limit);
+            return Scene::parse_limited(&text, path, &read, limit);
+        }
         let root = path
             .parent()
             .filter(|p| !p.as_os_str().is_empty())
@@ -218,8 +256,8 @@ impl Scene {
             file: root.to_owned(),
             error,
         })?;
-        let read = confined_reader(root);
-        Scene::parse_with(&read_scene_text(path)?, path, &read)
+        let read = confined_reader_limited(root, limit);
+        Scene::parse_limited(&text, path, &read, limit)
     }
 
     /// Parses and validates scene text; `path` names it in errors and anchors mesh paths.
@@ -230,8 +268,24 @@ impl Scene {
     /// [`Scene::parse`], reading meshes and MTLs through `read` (a fuzzer or an embedder
     /// can serve them from memory).
     pub fn parse_with(src: &str, path: &Path, read: &ReadFile<'_>) -> Result<Scene, SceneError> {
+        Scene::parse_limited(src, path, read, LoadOptions::default().max_input_bytes)
+    }
+
+    /// [`Scene::parse_with`] with `limit` bytes unpacked at most from one `.gz` mesh.
+    fn parse_limited(
+        src: &str,
+        path: &Path,
+        read: &ReadFile<'_>,
+        limit: u64,
+    ) -> Result<Scene, SceneError> {
         let file: SceneFile = toml::from_str(src).map_err(|e| syntax_error(src, path, &e))?;
-        Validator { src, path, read }.scene(file)
+        Validator {
+            src,
+            path,
+            read,
+            limit,
+        }
+        .scene(file)
     }
 
     /// The sizes the scene's camera asks for.
@@ -242,8 +296,8 @@ impl Scene {
 
 /// A scene file's text: a regular file within the input limit, in UTF-8 (else an error
 /// naming the line where it stops being UTF-8).
-fn read_scene_text(path: &Path) -> Result<String, SceneError> {
-    let bytes = read_limited(path, max_input_bytes()).map_err(|e| match e {
+fn read_scene_text(path: &Path, limit: u64) -> Result<String, SceneError> {
+    let bytes = read_limited(path, limit).map_err(|e| match e {
         ReadError::Io(error) => SceneError::Io {
             file: path.to_owned(),
             error,
@@ -308,19 +362,35 @@ struct Validator<'a> {
     src: &'a str,
     path: &'a Path,
     read: &'a ReadFile<'a>,
+    /// The most bytes unpacked from one `.gz` mesh ([`LoadOptions::max_input_bytes`]).
+    limit: u64,
 }
 
 /// How a scene reads the files it names (meshes and their MTLs): the bytes, or a message.
 pub type ReadFile<'a> = dyn Fn(&Path) -> Result<Vec<u8>, String> + 'a;
 
-/// [`ReadFile`] from the file system: regular files only, at most [`max_input_bytes`].
+/// [`ReadFile`] from the file system: regular files only, at most the default input limit
+/// ([`LoadOptions`]).
 pub fn read_from_disk(path: &Path) -> Result<Vec<u8>, String> {
-    read_limited(path, max_input_bytes()).map_err(|e| e.to_string())
+    read_from_disk_limited(path, LoadOptions::default().max_input_bytes)
+}
+
+/// [`read_from_disk`] with at most `limit` bytes.
+pub fn read_from_disk_limited(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
+    read_limited(path, limit).map_err(|e| e.to_string())
 }
 
 /// A [`ReadFile`] that reads only files whose real path (symbolic links followed) lies
-/// below `root`, which must itself be canonical.
+/// below `root`, which must itself be canonical; at most the default input limit.
 pub fn confined_reader(root: PathBuf) -> impl Fn(&Path) -> Result<Vec<u8>, String> {
+    confined_reader_limited(root, LoadOptions::default().max_input_bytes)
+}
+
+/// [`confined_reader`] with at most `limit` bytes a file.
+pub fn confined_reader_limited(
+    root: PathBuf,
+    limit: u64,
+) -> impl Fn(&Path) -> Result<Vec<u8>, String> {
     move |path: &Path| {
         let real = std::fs::canonicalize(path).map_err(|e| format!("cannot read: {e}"))?;
         if !real.starts_with(&root) {
@@ -330,25 +400,13 @@ pub fn confined_reader(root: PathBuf) -> impl Fn(&Path) -> Result<Vec<u8>, Strin
                 root.display()
             ));
         }
-        read_from_disk(&real)
+        read_from_disk_limited(&real, limit)
     }
 }
 
-/// The default of [`max_input_bytes`]: 2 GiB, twice the largest mesh glint is meant for
-/// (an OBJ of about 15 million triangles).
+/// The default of [`LoadOptions::max_input_bytes`], MiB: 2 GiB, twice the largest mesh
+/// glint is meant for (an OBJ of about 15 million triangles).
 pub const DEFAULT_MAX_INPUT_MIB: u64 = 2048;
-
-/// The most bytes glint reads from one input file, and the most it unpacks from one
-/// `.gz`: `GLINT_MAX_INPUT_MIB` (MiB) when set to a number, else
-/// [`DEFAULT_MAX_INPUT_MIB`]. It keeps `/dev/zero`, `/dev/urandom` or a gzip bomb from
-/// filling memory.
-pub fn max_input_bytes() -> u64 {
-    std::env::var("GLINT_MAX_INPUT_MIB")
-        .ok()
-        .and_then(|v| v.trim().parse::<u64>().ok())
-        .unwrap_or(DEFAULT_MAX_INPUT_MIB)
-        .saturating_mul(1 << 20)
-}
 
 /// Why an input file was not read.
 #[derive(Debug, thiserror::Error)]
