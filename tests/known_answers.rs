@@ -1,4 +1,4 @@
-//! Known answers on the CPU tracers, computed by hand from SPEC.md's formulas.
+//! Known answers on the CPU tracers, computed by hand from the README's formulas ("Scene format").
 
 mod common;
 

@@ -372,7 +372,7 @@ pub fn shadow_origin<R: Real>(p: V3<R>, n: V3<R>) -> V3<R> {
     p + n * (scale * R::EPSILON * sixty_four)
 }
 
-/// WGSL `shade`: SPEC.md's Phong model at a hit, each term only where the model has it.
+/// WGSL `shade`: the Phong model (README, "Scene format") at a hit, each term only where the model has it.
 pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
     let m: &Material = &g.buf.materials[prim_material(g, hit) as usize];
     let p = ray.origin + ray.dir * hit.t;

@@ -1,4 +1,4 @@
-//! The TOML scene format as serde reads it (SPEC.md, "The scene format"). Unknown keys are
+//! The TOML scene format as serde reads it (README, "Scene format"). Unknown keys are
 //! errors; values that need checking keep their position (`Spanned`) so that an error can
 //! name the line.
 
