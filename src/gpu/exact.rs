@@ -164,6 +164,14 @@ pub fn binding_map(bindings: &[u32]) -> naga::back::spv::BindingMap {
         .collect()
 }
 
+/// A failure of the exact path's compilation, as [`GpuError`] reports one.
+fn compile_error(message: String) -> GpuError {
+    GpuError::Runtime {
+        during: "shader compilation",
+        message,
+    }
+}
+
 impl ExactSource {
     /// Parses and validates `wgsl` for `device`; `Ok(Err(reason))` where the device cannot
     /// take SPIR-V, so the caller compiles the WGSL through wgpu instead.
@@ -185,18 +193,14 @@ impl ExactSource {
     /// Parses and validates `wgsl` for SPIR-V written for `target`, with no device (the
     /// tests read the words of every kernel this way).
     pub fn compile(wgsl: &str, target: SpirvTarget) -> Result<ExactSource, GpuError> {
-        let fail = |message| GpuError::Runtime {
-            during: "shader compilation",
-            message,
-        };
-        let module =
-            naga::front::wgsl::parse_str(wgsl).map_err(|e| fail(e.emit_to_string(wgsl)))?;
+        let module = naga::front::wgsl::parse_str(wgsl)
+            .map_err(|e| compile_error(e.emit_to_string(wgsl)))?;
         let info = naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
             naga::valid::Capabilities::all(),
         )
         .validate(&module)
-        .map_err(|e| fail(e.emit_to_string(wgsl)))?;
+        .map_err(|e| compile_error(e.emit_to_string(wgsl)))?;
         Ok(ExactSource {
             module,
             info,
@@ -214,10 +218,6 @@ impl ExactSource {
         constants: &[(&str, f64)],
         bindings: &[u32],
     ) -> Result<Vec<u32>, GpuError> {
-        let fail = |e: String| GpuError::Runtime {
-            during: "shader compilation",
-            message: e,
-        };
         let constants: naga::back::PipelineConstants =
             constants.iter().map(|&(k, v)| (k.to_string(), v)).collect();
         let (module, info) = naga::back::pipeline_constants::process_overrides(
@@ -226,7 +226,7 @@ impl ExactSource {
             Some((naga::ShaderStage::Compute, entry)),
             &constants,
         )
-        .map_err(|e| fail(e.to_string()))?;
+        .map_err(|e| compile_error(e.to_string()))?;
         let mut options = self.options.clone();
         options.binding_map = binding_map(bindings);
         naga::back::spv::write_vec(
@@ -238,7 +238,7 @@ impl ExactSource {
                 entry_point: entry.to_string(),
             }),
         )
-        .map_err(|e| fail(e.to_string()))
+        .map_err(|e| compile_error(e.to_string()))
     }
 
     /// The SPIR-V words of entry point `entry` with the override `constants` applied,
@@ -252,10 +252,7 @@ impl ExactSource {
         let words = self.plain_spirv(entry, constants, bindings)?;
         super::spirv::forbid_contraction(&words)
             .map(|(words, _)| words)
-            .map_err(|e| GpuError::Runtime {
-                during: "shader compilation",
-                message: e.to_string(),
-            })
+            .map_err(|e| compile_error(e.to_string()))
     }
 
     /// The driver's module for entry point `entry` specialised by `constants`, for a
