@@ -33,4 +33,4 @@ mod renderer;
 pub mod scene;
 pub mod stages;
 
-pub use renderer::{Backend, RenderError, RenderOptions, Renderer, Tracer};
+pub use renderer::{Backend, RenderError, RenderOptions, Renderer, Tracer, UnknownBackend};

@@ -960,3 +960,28 @@ fn same_file(a: &Path, b: &Path) -> bool {
         _ => false,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Backend;
+    use clap::ValueEnum;
+
+    /// The command line's backend names are the library's (`glint::Backend::NAMES`), each
+    /// for the same backend, so `--backend` and a library user name a backend one way.
+    #[test]
+    fn cli_backend_names_are_the_librarys() {
+        for b in Backend::value_variants() {
+            let name = b
+                .to_possible_value()
+                .expect("a visible value")
+                .get_name()
+                .to_string();
+            assert_eq!(
+                name.parse::<glint::Backend>(),
+                Ok(glint::Backend::from(*b)),
+                "{name}"
+            );
+        }
+        assert_eq!(Backend::value_variants().len(), glint::Backend::NAMES.len());
+    }
+}

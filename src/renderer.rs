@@ -34,6 +34,53 @@ pub enum Backend {
     CpuF64,
 }
 
+impl Backend {
+    /// Every backend, in the order of [`Backend::NAMES`].
+    pub const ALL: [Backend; 5] = [
+        Backend::Auto,
+        Backend::Gpu,
+        Backend::GpuRq,
+        Backend::Cpu,
+        Backend::CpuF64,
+    ];
+
+    /// The names [`std::str::FromStr`] takes and [`std::fmt::Display`] writes, as the
+    /// command line's `--backend` spells them.
+    pub const NAMES: [&'static str; 5] = ["auto", "gpu", "gpu-rq", "cpu", "cpu-f64"];
+
+    /// This backend's name.
+    pub fn name(self) -> &'static str {
+        Backend::NAMES[Backend::ALL.iter().position(|&b| b == self).unwrap_or(0)]
+    }
+}
+
+/// A backend name that is none of [`Backend::NAMES`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown backend {given:?}: expected one of auto, gpu, gpu-rq, cpu, cpu-f64")]
+pub struct UnknownBackend {
+    /// What was given.
+    pub given: String,
+}
+
+impl std::str::FromStr for Backend {
+    type Err = UnknownBackend;
+    fn from_str(s: &str) -> Result<Backend, UnknownBackend> {
+        Backend::NAMES
+            .iter()
+            .position(|&n| n == s)
+            .map(|k| Backend::ALL[k])
+            .ok_or_else(|| UnknownBackend {
+                given: s.to_string(),
+            })
+    }
+}
+
+impl std::fmt::Display for Backend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Options of one render; `None` takes the scene's own value.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RenderOptions {
@@ -188,5 +235,28 @@ impl Renderer {
                     .0
             }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Backend, UnknownBackend};
+
+    /// Every name parses to its backend and back; an unknown one is an error naming it.
+    #[test]
+    fn backend_names_round_trip() {
+        for (b, n) in Backend::ALL.iter().zip(Backend::NAMES) {
+            assert_eq!(n.parse::<Backend>(), Ok(*b));
+            assert_eq!(b.to_string(), n);
+        }
+        // The twin: a near miss is refused, with the name in the error.
+        let e = "GPU".parse::<Backend>().unwrap_err();
+        assert_eq!(
+            e,
+            UnknownBackend {
+                given: "GPU".into()
+            }
+        );
+        assert!(e.to_string().contains("\"GPU\""));
     }
 }
