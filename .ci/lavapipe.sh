@@ -9,8 +9,7 @@
 #     bash .ci/lavapipe.sh 26 -- target/release/glint adapters
 #
 # Settings printed (bash `export` lines, for eval):
-#   25: VK_ICD_FILENAMES, LD_LIBRARY_PATH, GLINT_MESA25_VERSION (`.ci/test.sh` reads it) and
-#       GLINT_MESA_VERSION.
+#   25: VK_ICD_FILENAMES, LD_LIBRARY_PATH and GLINT_MESA_VERSION (`.ci/test.sh` reads it).
 #   26: VK_ICD_FILENAMES, GLINT_MESA_VERSION, GLINT_LAVAPIPE_LOADER (the runner below) and
 #       CARGO_TARGET_X86_64_UNKNOWN_LINUX_GNU_RUNNER (the same runner, so that `cargo run`,
 #       `cargo test` and `cargo bench` start each binary through it). No LD_LIBRARY_PATH:
@@ -382,7 +381,6 @@ else
         write_runner "$loader" "$libpath" "$version" "$icd"
     fi
 fi
-if [ "$want" = 25 ]; then settings+=("GLINT_MESA25_VERSION=$version"); fi
 settings+=("GLINT_MESA_VERSION=$version")
 if [ "$want" = 26 ]; then
     settings+=("GLINT_LAVAPIPE_LOADER=$runner" "CARGO_TARGET_X86_64_UNKNOWN_LINUX_GNU_RUNNER=$runner")

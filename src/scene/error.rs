@@ -77,8 +77,12 @@ impl SceneError {
 
 /// The 1-based line of byte offset `pos` in `src`.
 pub fn line_of(src: &str, pos: usize) -> usize {
-    let pos = pos.min(src.len());
-    src.as_bytes()[..pos]
+    line_of_bytes(src.as_bytes(), pos)
+}
+
+/// [`line_of`] for bytes that need not be UTF-8 (a mesh or MTL being refused).
+pub fn line_of_bytes(bytes: &[u8], pos: usize) -> usize {
+    bytes[..pos.min(bytes.len())]
         .iter()
         .filter(|&&b| b == b'\n')
         .count()

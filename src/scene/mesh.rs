@@ -562,11 +562,7 @@ fn short_face_warning(n: usize, first: usize) -> String {
 /// line longer than `obj::MAX_LINE_BYTES`.
 fn mtl_junk(mtl: &[u8]) -> Option<(u32, String)> {
     if let Err(e) = std::str::from_utf8(mtl) {
-        let line = mtl[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count() as u32
-            + 1;
+        let line = super::error::line_of_bytes(mtl, e.valid_up_to()) as u32;
         return Some((line, "not UTF-8".to_string()));
     }
     super::obj::junk(mtl, true)
@@ -753,7 +749,10 @@ fn gunzip_parse(
                 } else if filled > super::obj::MAX_LINE_BYTES || rest[searched..filled].contains(&0)
                 {
                     // No line end in more than a line's length, or a NUL: not an OBJ text.
-                    let before: usize = handed.iter().map(|h| line_count(h)).sum();
+                    let before: usize = handed
+                        .iter()
+                        .map(|h| super::error::line_of_bytes(h, h.len()) - 1)
+                        .sum();
                     let (line, why) = super::obj::junk(&rest[..filled], false)
                         .unwrap_or((1, "not an OBJ text".into()));
                     junk = Some(format!("line {}: {why}", before as u32 + line));
@@ -809,11 +808,6 @@ fn gunzip_parse(
     let parsed = super::obj::join_pieces(pieces?, normals);
     crate::stages::record("OBJ parse", t0.elapsed().saturating_sub(inflating));
     Some((buf, parsed))
-}
-
-/// The line ends in `bytes`.
-fn line_count(bytes: &[u8]) -> usize {
-    bytes.iter().filter(|&&b| b == b'\n').count()
 }
 
 /// Records the gunzip stage when dropped (at every return of `gunzip`).

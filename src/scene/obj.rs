@@ -36,11 +36,7 @@ pub const MAX_LINE_BYTES: usize = 1 << 20;
 
 /// The line (from 1) of byte `pos` of `bytes`.
 fn line_at(bytes: &[u8], pos: usize) -> u32 {
-    bytes[..pos.min(bytes.len())]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count() as u32
-        + 1
+    super::error::line_of_bytes(bytes, pos) as u32
 }
 
 /// Why `bytes`, all or the start of an OBJ or MTL text, is not one: a NUL byte, or a line
