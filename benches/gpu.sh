@@ -7,18 +7,31 @@
 #
 #     bash benches/gpu.sh [ADAPTER]      # ADAPTER: part of the adapter's name (default: the best)
 #
+# On a machine without cargo, GLINT_PREBUILT=DIR takes `DIR/glint` and the GPU test binaries
+# `DIR/tests/*` (built with `cargo test --release --no-run`, as `target/release/glint` is
+# where the tests look for the program) instead of building them.
+#
 # Needs the meshes (`bash scenes/fetch-meshes.sh`) and the peers scenes
 # (`python3 benches/peer_scene.py`, numpy) for those rows; the seed scenes always run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 adapter="${1:-}"
-cargo build --release --locked -q
+if [ -z "${GLINT_PREBUILT:-}" ]; then
+    cargo build --release --locked -q
+fi
 echo "== adapters"
 ./target/release/glint adapters
 [ -n "$adapter" ] && export GLINT_ADAPTER="$adapter"
 echo "== GPU tests on ${GLINT_ADAPTER:-the best adapter}"
-cargo test --release --locked $(for f in $(grep -l '^gpu_sentinel!();' tests/*.rs); do echo --test "$(basename "$f" .rs)"; done) 2>&1 |
-    grep -E '^test result|FAILED|panicked|GPU tests on' || true
+if [ -n "${GLINT_PREBUILT:-}" ]; then
+    for t in "$GLINT_PREBUILT"/tests/*; do
+        echo "-- $(basename "$t")"
+        "$t" 2>&1 | grep -E '^test result|FAILED|panicked|GPU tests on' || true
+    done
+else
+    cargo test --release --locked $(for f in $(grep -l '^gpu_sentinel!();' tests/*.rs); do echo --test "$(basename "$f" .rs)"; done) 2>&1 |
+        grep -E '^test result|FAILED|panicked|GPU tests on' || true
+fi
 scenes=(scenes/sphere.toml scenes/triangle.toml scenes/umbrella.toml scenes/bb8.toml scenes/mitsubishi.toml)
 [ -f scenes/meshes/dragon_full.obj.gz ] && scenes+=(scenes/dragon.toml)
 for t in 2 100000 1000000; do

@@ -7,8 +7,9 @@ use serde::Serialize;
 
 use crate::buffers::{SceneBuffers, Specialisation};
 use crate::compare::diff;
-use crate::gpu::Gpu;
+use crate::gpu::{Gpu, GpuOptions, GpuTimings, Kernel};
 use crate::image::Image;
+use crate::render::{Backend, RenderError, TracerKind};
 use crate::scene::{Scene, TriangleAlgorithm};
 
 /// One measured configuration.
@@ -16,8 +17,8 @@ use crate::scene::{Scene, TriangleAlgorithm};
 pub struct Row {
     /// Scene name.
     pub scene: String,
-    /// `gpu`, `gpu-general`, `gpu-rq` (the ray-query tracer), `cpu-f32` or `cpu-f64`.
-    pub tracer: String,
+    /// The tracer (in JSON: `gpu`, `gpu-general`, `gpu-rq`, `cpu-f32` or `cpu-f64`).
+    pub tracer: TracerKind,
     /// GPU rows: the BVH traversal, `packet` (one packet per subgroup) or `per-ray`; `None`
     /// for the ray-query and CPU rows.
     pub traversal: Option<String>,
@@ -78,6 +79,46 @@ pub struct Report {
     pub rows: Vec<Row>,
 }
 
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Image size (default: each scene camera's).
+    pub size: Option<(u32, u32)>,
+    /// Only this triangle algorithm (default: all three where a scene has triangles).
+    pub triangle: Option<TriangleAlgorithm>,
+    /// Timed runs per configuration, after one warm-up (at least 1).
+    pub runs: usize,
+    /// The tracers: [`Backend::Gpu`] gives the specialised shader and the general one
+    /// beside it, [`Backend::GpuRq`] the ray-query shader where the device has ray queries
+    /// (skipped where not), [`Backend::Cpu`] the f32 mirror, [`Backend::CpuF64`] the ground
+    /// truth (which every row's error is measured against, whether or not it is listed).
+    /// [`Backend::Auto`] is taken as `Gpu`.
+    pub backends: Vec<Backend>,
+    /// The device, for the GPU rows.
+    pub gpu: GpuOptions,
+}
+
+impl Default for Options {
+    /// Every tracer, each scene's size, all algorithms, 5 runs, the best adapter.
+    fn default() -> Options {
+        Options {
+            size: None,
+            triangle: None,
+            runs: 5,
+            backends: vec![Backend::Gpu, Backend::GpuRq, Backend::Cpu, Backend::CpuF64],
+            gpu: GpuOptions::default(),
+        }
+    }
+}
+
+impl Options {
+    fn wants(&self, b: Backend) -> bool {
+        self.backends
+            .iter()
+            .any(|&x| x == b || (b == Backend::Gpu && x == Backend::Auto))
+    }
+}
+
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
@@ -87,19 +128,12 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Runs the benchmark on `scenes` (name, scene) at `size` with `runs` timed runs each,
-/// calling `progress(done, total, label)` as it goes.
-pub fn run(
+/// The configurations of `scenes`: each scene with each algorithm asked for.
+fn configs(
     scenes: &[(String, Scene)],
-    size: Option<(u32, u32)>,
     only: Option<TriangleAlgorithm>,
-    runs: usize,
-    gpu: Option<&Gpu>,
-    progress: &mut dyn FnMut(usize, usize, &str),
-) -> Result<Report, crate::gpu::GpuError> {
-    let runs = runs.max(1);
-    let mut rows = Vec::new();
-    let configs: Vec<(usize, TriangleAlgorithm)> = scenes
+) -> Vec<(usize, TriangleAlgorithm)> {
+    scenes
         .iter()
         .enumerate()
         .flat_map(|(k, (_, s))| {
@@ -112,12 +146,30 @@ pub fn run(
             };
             algos.into_iter().map(move |a| (k, a))
         })
-        .collect();
+        .collect()
+}
+
+/// Runs the benchmark on `scenes` (name, scene) as `options` say, calling
+/// `progress(done, total, label)` as it goes. The device is started here when a GPU
+/// tracer is asked for.
+pub fn run(
+    scenes: &[(String, Scene)],
+    options: &Options,
+    progress: &mut dyn FnMut(usize, usize, &str),
+) -> Result<Report, RenderError> {
+    let gpu = if options.wants(Backend::Gpu) || options.wants(Backend::GpuRq) {
+        Some(Gpu::with_options(&options.gpu)?)
+    } else {
+        None
+    };
+    let runs = options.runs.max(1);
+    let mut rows = Vec::new();
+    let configs = configs(scenes, options.triangle);
     let total = configs.len();
     for (done, (k, algo)) in configs.into_iter().enumerate() {
         let (name, scene) = &scenes[k];
         progress(done, total, &format!("{name} {algo}"));
-        let (w, h) = size.unwrap_or(scene.size());
+        let (w, h) = options.size.unwrap_or(scene.size());
         let buf = SceneBuffers::new(scene, w, h, algo);
         let build_ms = median(
             (0..runs)
@@ -128,131 +180,162 @@ pub fn run(
                 })
                 .collect(),
         );
-        let primitives = buf.spheres.len() + buf.triangles.len();
         let spec = Specialisation::for_scene(&buf);
         let truth = crate::cpu::render_f64(scene, &buf, spec);
         let mirror = crate::cpu::render_f32(&buf, spec);
-        let mut row = |tracer: &str,
-                       traversal: Option<&str>,
-                       times: Vec<f64>,
-                       img: &Image,
-                       gpu_parts: Option<[f64; 4]>,
-                       accel_ms: Option<f64>| {
-            let d = diff(img, &truth);
-            let equals_cpu_f32 = gpu_parts.map(|_| diff(img, &mirror).bit_exact());
-            let med = median(times.clone());
-            rows.push(Row {
-                scene: name.clone(),
-                tracer: tracer.into(),
-                traversal: traversal.map(Into::into),
-                triangle: algo.name().into(),
-                size: (w, h),
-                primitives,
-                build_ms,
-                median_ms: med,
-                min_ms: times.iter().copied().fold(f64::INFINITY, f64::min),
-                max_ms: times.iter().copied().fold(0.0, f64::max),
-                rays_per_s: (w as f64 * h as f64) / (med / 1e3),
-                compile_ms: gpu_parts.map(|p| p[0]),
-                upload_ms: gpu_parts.map(|p| p[1]),
-                trace_ms: gpu_parts.map(|p| p[2]),
-                readback_ms: gpu_parts.map(|p| p[3]),
-                accel_ms,
-                max_err: d.max_abs,
-                rms_err: d.rms,
-                pixels_off: d.differing_pixels,
-                hit_miss: d.hit_miss,
-                equals_cpu_f32,
-            });
+        let mut rower = Rower {
+            scene: name,
+            algo,
+            buf: &buf,
+            build_ms,
+            truth: &truth,
+            mirror: &mirror,
+            rows: &mut rows,
         };
-        if let Some(gpu) = gpu {
-            let mut tracers = vec![
-                ("gpu", gpu.compute_kernel(spec)?, spec),
-                (
-                    "gpu-general",
-                    gpu.compute_kernel(Specialisation::general(&buf))?,
-                    Specialisation::general(&buf),
-                ),
-            ];
-            if gpu.has_ray_query() {
-                let rq = gpu.ray_query_kernel()?;
-                tracers.push(("gpu-rq", rq, spec));
-            }
-            for (tracer, kernel, sp) in tracers {
-                kernel.clear_cache();
-                let compile = kernel.prepare(&gpu.device, sp)?;
-                let mut parts = Vec::new();
-                // Every run reads back into the warm-up's image, as the CPU rows draw
-                // into theirs: the frame, not the mapping of fresh memory.
-                let (i, _) = kernel.render(&gpu.device, &gpu.queue, &buf, sp, &mut |_, _| {})?;
-                let mut img = Some(i);
-                for _ in 0..runs {
-                    let image = img.as_mut().expect("rendered");
-                    let t = kernel.render_into(
-                        &gpu.device,
-                        &gpu.queue,
-                        &buf,
-                        sp,
-                        image,
-                        &mut |_, _| {},
-                    )?;
-                    parts.push(t);
-                }
-                let times: Vec<f64> = parts.iter().map(|t| ms(t.trace + t.readback)).collect();
-                let med = |f: &dyn Fn(&crate::gpu::GpuTimings) -> Duration| {
-                    median(parts.iter().map(|t| ms(f(t))).collect())
-                };
-                let p = [
-                    ms(compile),
-                    med(&|t| t.upload),
-                    med(&|t| t.trace),
-                    med(&|t| t.readback),
-                ];
-                let accel = kernel.is_ray_query().then(|| med(&|t| t.accel));
-                let traversal = (!kernel.is_ray_query()).then(|| kernel.traversal_name());
-                row(
-                    tracer,
-                    traversal,
-                    times,
-                    img.as_ref().expect("rendered"),
-                    Some(p),
-                    accel,
-                );
-            }
+        if let Some(gpu) = &gpu {
+            gpu_rows(gpu, options, &buf, spec, runs, &mut rower)?;
         }
-        let timed = |f: &dyn Fn() -> Image| {
-            let mut img = f();
-            let mut times = Vec::new();
+        if options.wants(Backend::Cpu) {
+            // The packet tracer draws into the warm-up's image at every timed run, as a
+            // sequence of frames would (and as Mitsuba's frames reuse their memory through
+            // Dr.Jit's allocator cache): the frame, not the mapping of fresh memory.
+            let mut img = mirror.clone();
+            let mut t = Vec::new();
             for _ in 0..runs {
                 let t0 = Instant::now();
-                img = f();
-                times.push(ms(t0.elapsed()));
+                crate::cpu::render_f32_into(&buf, spec, &mut img);
+                t.push(ms(t0.elapsed()));
             }
-            (times, img)
-        };
-        // The packet tracer draws into the warm-up's image at every timed run, as a
-        // sequence of frames would (and as Mitsuba's frames reuse their memory through
-        // Dr.Jit's allocator cache): the frame, not the mapping of fresh memory.
-        let mut img = crate::cpu::render_f32(&buf, spec);
-        let mut t = Vec::new();
-        for _ in 0..runs {
-            let t0 = Instant::now();
-            crate::cpu::render_f32_into(&buf, spec, &mut img);
-            t.push(ms(t0.elapsed()));
+            rower.row(TracerKind::CpuF32, None, t, &img, None, None);
         }
-        row("cpu-f32", None, t, &img, None, None);
-        let (t, img) = timed(&|| crate::cpu::render_f64(scene, &buf, spec));
-        row("cpu-f64", None, t, &img, None, None);
+        if options.wants(Backend::CpuF64) {
+            let mut img = truth.clone();
+            let mut t = Vec::new();
+            for _ in 0..runs {
+                let t0 = Instant::now();
+                img = crate::cpu::render_f64(scene, &buf, spec);
+                t.push(ms(t0.elapsed()));
+            }
+            rower.row(TracerKind::CpuF64, None, t, &img, None, None);
+        }
     }
     progress(total, total, "done");
     Ok(Report {
-        adapter: gpu.map(|g| g.describe()).unwrap_or_else(|| "none".into()),
-        device_start_ms: gpu.map(|g| ms(g.start_time)),
+        adapter: gpu
+            .as_ref()
+            .map(|g| g.describe())
+            .unwrap_or_else(|| "none".into()),
+        device_start_ms: gpu.as_ref().map(|g| ms(g.start_time)),
         cpu_threads: rayon::current_num_threads(),
         cpu_simd: crate::cpu::packet::Simd::Best.name().into(),
         runs,
         rows,
     })
+}
+
+/// Makes the rows of one configuration: its errors against the f64 image, and for the GPU
+/// whether it equals the f32 mirror's.
+struct Rower<'r> {
+    scene: &'r str,
+    algo: TriangleAlgorithm,
+    buf: &'r SceneBuffers,
+    build_ms: f64,
+    truth: &'r Image,
+    mirror: &'r Image,
+    rows: &'r mut Vec<Row>,
+}
+
+impl Rower<'_> {
+    /// A row of `tracer` with the frame `times` (ms) and its last image; `gpu_parts` the
+    /// GPU's compile, upload, trace and readback (ms).
+    fn row(
+        &mut self,
+        tracer: TracerKind,
+        traversal: Option<&str>,
+        times: Vec<f64>,
+        img: &Image,
+        gpu_parts: Option<[f64; 4]>,
+        accel_ms: Option<f64>,
+    ) {
+        let (w, h) = (self.buf.params.width, self.buf.params.height);
+        let d = diff(img, self.truth);
+        let equals_cpu_f32 = gpu_parts.map(|_| diff(img, self.mirror).bit_exact());
+        let med = median(times.clone());
+        self.rows.push(Row {
+            scene: self.scene.to_string(),
+            tracer,
+            traversal: traversal.map(Into::into),
+            triangle: self.algo.name().into(),
+            size: (w, h),
+            primitives: self.buf.spheres.len() + self.buf.triangles.len(),
+            build_ms: self.build_ms,
+            median_ms: med,
+            min_ms: times.iter().copied().fold(f64::INFINITY, f64::min),
+            max_ms: times.iter().copied().fold(0.0, f64::max),
+            rays_per_s: (w as f64 * h as f64) / (med / 1e3),
+            compile_ms: gpu_parts.map(|p| p[0]),
+            upload_ms: gpu_parts.map(|p| p[1]),
+            trace_ms: gpu_parts.map(|p| p[2]),
+            readback_ms: gpu_parts.map(|p| p[3]),
+            accel_ms,
+            max_err: d.max_abs,
+            rms_err: d.rms,
+            pixels_off: d.differing_pixels,
+            hit_miss: d.hit_miss,
+            equals_cpu_f32,
+        });
+    }
+}
+
+/// The GPU rows of one configuration: the specialised and the general shader, and the
+/// ray-query shader where the device has ray queries, each as `options` ask.
+fn gpu_rows(
+    gpu: &Gpu,
+    options: &Options,
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    runs: usize,
+    rower: &mut Rower<'_>,
+) -> Result<(), RenderError> {
+    let mut tracers: Vec<(TracerKind, &Kernel, Specialisation)> = Vec::new();
+    if options.wants(Backend::Gpu) {
+        let general = Specialisation::general(buf);
+        tracers.push((TracerKind::Gpu, gpu.compute_kernel(spec)?, spec));
+        tracers.push((
+            TracerKind::GpuGeneral,
+            gpu.compute_kernel(general)?,
+            general,
+        ));
+    }
+    if options.wants(Backend::GpuRq) && gpu.has_ray_query() {
+        tracers.push((TracerKind::GpuRq, gpu.ray_query_kernel()?, spec));
+    }
+    for (tracer, kernel, sp) in tracers {
+        kernel.clear_cache();
+        let compile = kernel.prepare(&gpu.device, sp)?;
+        let mut parts = Vec::new();
+        // Every run reads back into the warm-up's image, as the CPU rows draw into
+        // theirs: the frame, not the mapping of fresh memory.
+        let (mut img, _) = kernel.render(&gpu.device, &gpu.queue, buf, sp, &mut |_, _| {})?;
+        for _ in 0..runs {
+            let t =
+                kernel.render_into(&gpu.device, &gpu.queue, buf, sp, &mut img, &mut |_, _| {})?;
+            parts.push(t);
+        }
+        let times: Vec<f64> = parts.iter().map(|t| ms(t.trace + t.readback)).collect();
+        let med =
+            |f: &dyn Fn(&GpuTimings) -> Duration| median(parts.iter().map(|t| ms(f(t))).collect());
+        let p = [
+            ms(compile),
+            med(&|t| t.upload),
+            med(&|t| t.trace),
+            med(&|t| t.readback),
+        ];
+        let accel = kernel.is_ray_query().then(|| med(&|t| t.accel));
+        let traversal = (!kernel.is_ray_query()).then(|| kernel.traversal_name());
+        rower.row(tracer, traversal, times, &img, Some(p), accel);
+    }
+    Ok(())
 }
 
 impl Report {
@@ -277,7 +360,7 @@ impl Report {
                 r.scene,
                 match &r.traversal {
                     Some(t) => format!("{} ({t})", r.tracer),
-                    None => r.tracer.clone(),
+                    None => r.tracer.to_string(),
                 },
                 r.triangle,
                 r.primitives,
@@ -331,12 +414,12 @@ impl Report {
             }
         }
         for r in &self.rows {
-            let c = match r.tracer.as_str() {
-                "gpu" => [220, 30, 30],
-                "gpu-general" => [240, 150, 20],
-                "gpu-rq" => [150, 40, 200],
-                "cpu-f32" => [30, 60, 220],
-                _ => [30, 160, 60],
+            let c = match r.tracer {
+                TracerKind::Gpu => [220, 30, 30],
+                TracerKind::GpuGeneral => [240, 150, 20],
+                TracerKind::GpuRq => [150, 40, 200],
+                TracerKind::CpuF32 => [30, 60, 220],
+                TracerKind::CpuF64 => [30, 160, 60],
             };
             let lx = r.rays_per_s.max(1.0).log10().clamp(x0, x1);
             let ly = if r.max_err > 0.0 {
@@ -347,7 +430,7 @@ impl Report {
             let (cx, cy) = (px(lx) as i64, py(ly) as i64);
             for dy in -4i64..=4 {
                 for dx in -4i64..=4 {
-                    if dx * dx + dy * dy <= 16 || r.tracer == "gpu-rq" {
+                    if dx * dx + dy * dy <= 16 || r.tracer == TracerKind::GpuRq {
                         let (x, y) = (cx + dx, cy + dy);
                         if x >= 0 && y >= 0 && (x as u32) < w && (y as u32) < h {
                             img.put_pixel(x as u32, y as u32, image::Rgb(c));

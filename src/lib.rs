@@ -29,8 +29,8 @@ pub mod image;
 pub mod kernel;
 #[doc(hidden)]
 pub mod oracle;
-mod renderer;
+pub mod render;
 pub mod scene;
 pub mod stages;
 
-pub use renderer::{Backend, RenderError, RenderOptions, Renderer, Tracer, UnknownBackend};
+pub use render::{Backend, RenderError, RenderOptions, Renderer, Tracer, UnknownBackend};

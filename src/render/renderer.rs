@@ -9,7 +9,6 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use crate::buffers::{SceneBuffers, Specialisation};
 use crate::gpu::{Gpu, GpuError, GpuOptions, is_cpu_adapter};
 use crate::image::Image;
 use crate::scene::{Scene, TriangleAlgorithm};
@@ -99,6 +98,62 @@ pub enum RenderError {
     /// The GPU path failed (no adapter, a buffer too large, a device error).
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    /// The image could not be written.
+    #[error(transparent)]
+    Image(#[from] crate::image::ImageError),
+    /// The frame cannot fit in this process's memory (checked before any work).
+    #[error(transparent)]
+    Memory(#[from] super::memory::MemoryError),
+    /// The output is the scene file itself.
+    #[error("{}: the output would overwrite the scene file", .0.display())]
+    OverwritesScene(std::path::PathBuf),
+}
+
+/// A tracer by name: what made an image, in reports and the bench.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+pub enum TracerKind {
+    /// The shader, specialised for the scene.
+    #[serde(rename = "gpu")]
+    Gpu,
+    /// The shader with no specialisation (the bench's comparison).
+    #[serde(rename = "gpu-general")]
+    GpuGeneral,
+    /// The ray-query shader.
+    #[serde(rename = "gpu-rq")]
+    GpuRq,
+    /// The f32 CPU mirror, in packets.
+    #[serde(rename = "cpu-f32")]
+    CpuF32,
+    /// The f64 CPU ground truth.
+    #[serde(rename = "cpu-f64")]
+    CpuF64,
+}
+
+impl TracerKind {
+    /// The name reports print: `gpu`, `gpu-general`, `gpu-rq`, `cpu-f32`, `cpu-f64`.
+    pub fn name(self) -> &'static str {
+        match self {
+            TracerKind::Gpu => "gpu",
+            TracerKind::GpuGeneral => "gpu-general",
+            TracerKind::GpuRq => "gpu-rq",
+            TracerKind::CpuF32 => "cpu-f32",
+            TracerKind::CpuF64 => "cpu-f64",
+        }
+    }
+
+    /// Whether the GPU made the image.
+    pub fn is_gpu(self) -> bool {
+        matches!(
+            self,
+            TracerKind::Gpu | TracerKind::GpuGeneral | TracerKind::GpuRq
+        )
+    }
+}
+
+impl std::fmt::Display for TracerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// The tracer a [`Renderer`] runs: what [`Backend`] resolved to.
@@ -115,6 +170,7 @@ pub enum Tracer {
 
 /// Renders scenes on one backend; holds the device (if any) across renders.
 pub struct Renderer {
+    backend: Backend,
     tracer: Tracer,
     note: Option<String>,
 }
@@ -175,7 +231,11 @@ impl Renderer {
                 }
             }
         };
-        Ok(Renderer { tracer, note })
+        Ok(Renderer {
+            backend,
+            tracer,
+            note,
+        })
     }
 
     /// A GPU renderer on the caller's own device and queue (made with whatever adapter,
@@ -186,6 +246,7 @@ impl Renderer {
         queue: wgpu::Queue,
     ) -> Result<Renderer, RenderError> {
         Ok(Renderer {
+            backend: Backend::Gpu,
             tracer: Tracer::Gpu(Box::new(Gpu::from_device(info, device, queue)?)),
             note: None,
         })
@@ -194,6 +255,12 @@ impl Renderer {
     /// What `Auto` chose and why, when it did not choose the GPU.
     pub fn note(&self) -> Option<&str> {
         self.note.as_deref()
+    }
+
+    /// The backend this renderer was asked for (`Auto` falls back to the CPU in a
+    /// [`super::Job`] where the GPU cannot hold a scene).
+    pub fn backend(&self) -> Backend {
+        self.backend
     }
 
     /// The tracer this renderer runs.
@@ -212,29 +279,14 @@ impl Renderer {
     }
 
     /// Renders `scene` with `options`: the whole frame in memory, colours linear, t per
-    /// pixel (see [`Image`]). For frames larger than memory, the command line streams bands.
+    /// pixel (see [`Image`]); a [`super::Job`] to [`super::Output::Memory`], whose report
+    /// (warnings, timings) this drops. For files and frames larger than memory, run a
+    /// [`super::Job`].
     pub fn render(&self, scene: &Scene, options: &RenderOptions) -> Result<Image, RenderError> {
-        let (w, h) = options.size.unwrap_or(scene.size());
-        let algo = options.triangle.unwrap_or(scene.triangle);
-        let mut buf = SceneBuffers::new(scene, w, h, algo);
-        if let Some(n) = options.samples {
-            buf.params.samples = n.clamp(1, crate::scene::MAX_SAMPLES);
-        }
-        let spec = Specialisation::for_scene(&buf);
-        Ok(match &self.tracer {
-            Tracer::Cpu => crate::cpu::render_f32(&buf, spec),
-            Tracer::CpuF64 => crate::cpu::render_f64(scene, &buf, spec),
-            Tracer::Gpu(g) => {
-                g.compute_kernel(spec)?
-                    .render(&g.device, &g.queue, &buf, spec, &mut |_, _| {})?
-                    .0
-            }
-            Tracer::GpuRq(g) => {
-                g.ray_query_kernel()?
-                    .render(&g.device, &g.queue, &buf, spec, &mut |_, _| {})?
-                    .0
-            }
-        })
+        let report = super::Job::borrowed(scene, super::Output::Memory)
+            .options(options.clone())
+            .run(self)?;
+        Ok(report.image.expect("a memory output returns its image"))
     }
 }
 

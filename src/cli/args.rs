@@ -1,0 +1,173 @@
+//! The command line's arguments (clap).
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use glint::scene::TriangleAlgorithm;
+
+/// `glint`'s arguments.
+#[derive(Parser)]
+#[command(
+    name = "glint",
+    version,
+    about = "A WGSL compute-shader ray tracer with a bit-exact CPU mirror"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+impl From<Backend> for glint::Backend {
+    fn from(b: Backend) -> glint::Backend {
+        match b {
+            Backend::Auto => glint::Backend::Auto,
+            Backend::Gpu => glint::Backend::Gpu,
+            Backend::GpuRq => glint::Backend::GpuRq,
+            Backend::Cpu => glint::Backend::Cpu,
+            Backend::CpuF64 => glint::Backend::CpuF64,
+        }
+    }
+}
+
+/// `--backend`: the library's [`glint::Backend`] by its names.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Backend {
+    /// A real GPU when there is one; the CPU tracer when the only adapters are CPU Vulkan
+    /// implementations (lavapipe: slower than the CPU tracer for every whole render measured) or
+    /// there is none (said in one line); the CPU tracer too when the scene exceeds the GPU's
+    /// buffers.
+    Auto,
+    /// The WGSL compute shader through wgpu (Vulkan).
+    Gpu,
+    /// The shader with the triangles traced by the driver's ray queries (VK_KHR_ray_query:
+    /// ray-tracing GPUs, Mesa ≥ 24.1's lavapipe); an error where there are none.
+    GpuRq,
+    /// The f32 CPU mirror of the shader.
+    Cpu,
+    /// The f64 CPU ground truth.
+    CpuF64,
+}
+
+/// The options every subcommand that loads a scene shares.
+#[derive(clap::Args)]
+pub struct CommonArgs {
+    /// Use the first Vulkan adapter whose name contains this.
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// Read only files below the scene's own folder (meshes, MTLs; links followed).
+    #[arg(long)]
+    pub confine: bool,
+}
+
+/// The frame options of `render` and `compare`.
+#[derive(clap::Args)]
+pub struct FrameArgs {
+    /// Image size WxH (default: the scene's camera).
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Triangle algorithm (default: the scene's).
+    #[arg(long)]
+    pub triangle: Option<TriangleAlgorithm>,
+    /// Antialiasing: N×N samples a pixel (default: the scene camera's `samples`).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=glint::scene::MAX_SAMPLES as i64))]
+    pub samples: Option<u32>,
+}
+
+/// The subcommands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene to a PNG (or an EXR).
+    Render {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Output image: .png (8-bit) or .exr (the f32 image exactly, t in alpha).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Print the time of each stage (read, gunzip, parse, BVH build, trace, PNG, ...).
+        #[arg(short, long)]
+        verbose: bool,
+        /// Which tracer.
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: Backend,
+        /// Neither read nor write the cache of large meshes and BVHs (kept in
+        /// GLINT_CACHE_DIR, else $XDG_CACHE_HOME/glint or ~/.cache/glint).
+        #[arg(long)]
+        no_cache: bool,
+        #[command(flatten)]
+        frame: FrameArgs,
+        #[command(flatten)]
+        common: CommonArgs,
+    },
+    /// Render a scene on the GPU and on the CPU mirror and measure the difference.
+    Compare {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        #[command(flatten)]
+        frame: FrameArgs,
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Where to write the difference image.
+        #[arg(long, default_value = "diff.png")]
+        diff: PathBuf,
+    },
+    /// List the Vulkan adapters, best first, with their drivers and versions.
+    Adapters,
+    /// Compare two images (PNG or EXR) with `compare`'s metrics and write a difference
+    /// image: an EXR made on a GPU machine against one made on the CPU elsewhere, bit for bit.
+    Diff {
+        /// The first image.
+        a: PathBuf,
+        /// The second image.
+        b: PathBuf,
+        /// Where to write the difference image (PNG).
+        #[arg(long, default_value = "diff.png")]
+        diff: PathBuf,
+    },
+    /// Speed against error: every scene × tracer × triangle algorithm, with a warm-up and
+    /// timed runs; writes report.md, report.json and plot.png to --out.
+    Bench {
+        /// Scene files (default: the five seed scenes in scenes/).
+        scenes: Vec<PathBuf>,
+        /// Image size WxH (default 1024x768).
+        #[arg(long, value_parser = parse_size, default_value = "1024x768")]
+        size: (u32, u32),
+        /// Timed runs per configuration.
+        #[arg(long, default_value_t = 5)]
+        runs: usize,
+        /// Output folder.
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+        #[command(flatten)]
+        common: CommonArgs,
+        /// Skip the GPU (CPU tracers only).
+        #[arg(long)]
+        no_gpu: bool,
+        /// Only this triangle algorithm (default: all three where a scene has triangles).
+        #[arg(long)]
+        triangle: Option<TriangleAlgorithm>,
+        /// Antialiasing for every scene: N×N samples a pixel (default: each scene's own).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=glint::scene::MAX_SAMPLES as i64))]
+        samples: Option<u32>,
+    },
+}
+
+/// `WxH`, each side in 1..=`MAX_IMAGE_SIDE`.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("{s:?}: expected WxH, e.g. 640x480"))?;
+    let p = |v: &str| -> Result<u32, String> {
+        let n: u32 = v
+            .trim()
+            .parse()
+            .map_err(|_| format!("{s:?}: {v:?} is not a whole number"))?;
+        if n == 0 || n as i64 > glint::scene::MAX_IMAGE_SIDE {
+            return Err(format!(
+                "{s:?}: each side must be in 1..={}",
+                glint::scene::MAX_IMAGE_SIDE
+            ));
+        }
+        Ok(n)
+    };
+    Ok((p(w)?, p(h)?))
+}

@@ -1,0 +1,7 @@
+//! The command line's parts that are not the library's work: its arguments, progress bar,
+//! allocator and environment. Only the `glint` binary compiles them.
+
+pub mod alloc;
+pub mod args;
+pub mod env;
+pub mod progress;

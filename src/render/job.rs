@@ -1,0 +1,508 @@
+//! [`Job`]: one frame of a scene on a [`Renderer`], from the scene to the file, as
+//! `glint render` makes it.
+
+use std::fmt;
+use std::time::{Duration, Instant};
+
+use super::output::{Output, Sink};
+use super::renderer::{RenderError, RenderOptions, Renderer, Tracer, TracerKind};
+use crate::buffers::{SceneBuffers, Specialisation};
+use crate::gpu::{Gpu, GpuError, GpuTimings};
+use crate::image::{Image, ImageError};
+use crate::scene::{Scene, TriangleAlgorithm};
+
+/// Rows per band of the GPU: large, since each dispatch and readback has a fixed cost (about
+/// 3.5 ms on lavapipe); about this many MiB of f32 pixels.
+const GPU_BAND_MIB: u64 = 64;
+
+/// Rows per band of the CPU tracers: small, since a band is the render's largest buffer once
+/// the scene is built (the dragon's peak: 162 MiB with 64 MiB bands, which hold its whole
+/// 1024×768 frame, 151 MiB with 4 MiB, 147 MiB with 2 MiB).
+const CPU_BAND_MIB: u64 = 2;
+
+/// Rows per band when a `w`×`h` frame is rendered and written band by band: about `mib` MiB
+/// of f32 pixels, an even number (the CPU packets are two rows high), at least 2.
+fn band_rows(w: u32, h: u32, mib: u64) -> u32 {
+    let rows = ((mib << 20) / (w as u64 * 16)).max(2) as u32 & !1;
+    rows.min(h.max(1))
+}
+
+/// Something a render should tell its user; it goes on, and the image is what it would be.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Warning {
+    /// From reading the scene (a degenerate triangle skipped, a mesh's normals, ...), with
+    /// its file and line.
+    Scene(String),
+    /// A primitive outside the range where glint's tests are exact (far, tiny or huge
+    /// geometry, `scene::range`).
+    Range(String),
+    /// The cache could not read or write an entry (the render is unaffected).
+    Cache(String),
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Warning::Scene(m) | Warning::Range(m) | Warning::Cache(m) => f.write_str(m),
+        }
+    }
+}
+
+/// A choice the renderer made that the user did not name.
+#[derive(Debug)]
+pub enum Note {
+    /// `auto` chose the CPU tracer, and why ([`Renderer::note`]).
+    Backend(String),
+    /// `auto`'s GPU could not hold the scene (its error), so the CPU tracer rendered it.
+    Fallback(GpuError),
+}
+
+impl fmt::Display for Note {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Note::Backend(m) => f.write_str(m),
+            Note::Fallback(e) => write!(f, "{e}; so the CPU tracer renders this"),
+        }
+    }
+}
+
+/// What a [`Job`] tells its caller while it runs, in order.
+#[derive(Debug)]
+pub enum Event<'e> {
+    /// A warning (also kept in [`RenderReport::warnings`]).
+    Warning(&'e Warning),
+    /// A note (also kept in [`RenderReport::notes`]).
+    Note(&'e Note),
+    /// What the cache did ("hit mesh", "stored bvh"): for a verbose front end.
+    Cache(&'e str),
+    /// Rows of the frame done so far, of `total`.
+    Rows {
+        /// Rows done.
+        done: u32,
+        /// Rows in the frame.
+        total: u32,
+    },
+}
+
+impl fmt::Display for Event<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Event::Warning(w) => write!(f, "warning: {w}"),
+            Event::Note(n) => write!(f, "note: {n}"),
+            Event::Cache(e) => write!(f, "cache: {e}"),
+            Event::Rows { done, total } => write!(f, "{done}/{total} rows"),
+        }
+    }
+}
+
+/// What a [`Job`] did.
+#[derive(Debug)]
+pub struct RenderReport {
+    /// Where the pixels went.
+    pub output: Output,
+    /// The frame's width.
+    pub width: u32,
+    /// The frame's height.
+    pub height: u32,
+    /// Triangles traced.
+    pub triangles: u32,
+    /// Spheres traced.
+    pub spheres: usize,
+    /// The triangle algorithm.
+    pub algorithm: TriangleAlgorithm,
+    /// The tracer that made the image (the CPU's after a fallback).
+    pub tracer: TracerKind,
+    /// The tracer in words: the SIMD build, or the adapter, traversal and GPU timings.
+    pub description: String,
+    /// The frame's time: the trace (on the GPU, trace and readback), without the scene's
+    /// preparation or the file's encoding.
+    pub frame: Duration,
+    /// The GPU's parts of the render, where the GPU made the image.
+    pub gpu: Option<GpuTimings>,
+    /// The warnings, in the order they came.
+    pub warnings: Vec<Warning>,
+    /// The notes, in the order they came.
+    pub notes: Vec<Note>,
+    /// The wall time of each stage recorded since the last report (`crate::stages`: the
+    /// scene's reading and parsing, the BVH build, the trace, the encoding, ...).
+    pub stages: Vec<(&'static str, Duration)>,
+    /// From the job's start to its end.
+    pub total: Duration,
+    /// The image, for [`Output::Memory`].
+    pub image: Option<Image>,
+}
+
+impl fmt::Display for RenderReport {
+    /// One line: `glint render`'s.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.output.path() {
+            Some(p) => write!(f, "{}: ", p.display())?,
+            None => f.write_str("memory: ")?,
+        }
+        write!(
+            f,
+            "{}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",
+            self.width,
+            self.height,
+            self.triangles,
+            self.algorithm,
+            self.spheres,
+            self.frame.as_secs_f64() * 1e3,
+            self.description
+        )
+    }
+}
+
+/// The scene a job renders: its own (whose primitives the buffers take, so they are not
+/// held twice), or the caller's.
+enum Source<'a> {
+    Owned(Box<Scene>),
+    Borrowed(&'a Scene),
+}
+
+/// One frame of a scene on a [`Renderer`]: everything `glint render` does.
+///
+/// - The frame goes to its [`Output`] band by band (bounded memory for a PNG, whatever the
+///   size), after a check that it fits in memory.
+/// - `auto`: where the GPU cannot hold the scene, the CPU tracer renders it, with a
+///   [`Note::Fallback`].
+/// - The scene's cache (when loaded with one) is drained of its events, and waited for
+///   before the report.
+/// - Warnings, notes, cache events and progress reach [`Job::on_event`] as they happen.
+pub struct Job<'a> {
+    scene: Source<'a>,
+    output: Output,
+    options: RenderOptions,
+    events: Box<dyn FnMut(Event<'_>) + 'a>,
+}
+
+/// The parts of a job that its stages share.
+struct Run<'j, 'a> {
+    events: &'j mut (dyn FnMut(Event<'_>) + 'a),
+    warnings: Vec<Warning>,
+    notes: Vec<Note>,
+}
+
+impl Run<'_, '_> {
+    fn warn(&mut self, w: Warning) {
+        (self.events)(Event::Warning(&w));
+        self.warnings.push(w);
+    }
+
+    fn note(&mut self, n: Note) {
+        (self.events)(Event::Note(&n));
+        self.notes.push(n);
+    }
+
+    /// What the cache did since the last call: its warnings as warnings, the rest as
+    /// events.
+    fn drain_cache(&mut self) {
+        for e in crate::cache::take_events() {
+            if e.starts_with("warning") {
+                let m = e.strip_prefix("warning: ").unwrap_or(&e).to_string();
+                self.warn(Warning::Cache(m));
+            } else {
+                (self.events)(Event::Cache(&e));
+            }
+        }
+    }
+}
+
+impl<'a> Job<'a> {
+    /// A job rendering `scene` (which it consumes: its primitives move into the render's
+    /// buffers) to `output`, with the scene's own size, samples and algorithm.
+    pub fn new(scene: Scene, output: Output) -> Job<'a> {
+        Job {
+            scene: Source::Owned(Box::new(scene)),
+            output,
+            options: RenderOptions::default(),
+            events: Box::new(|_| {}),
+        }
+    }
+
+    /// A job rendering the caller's `scene` (copied into the render's buffers).
+    pub fn borrowed(scene: &'a Scene, output: Output) -> Job<'a> {
+        Job {
+            scene: Source::Borrowed(scene),
+            output,
+            options: RenderOptions::default(),
+            events: Box::new(|_| {}),
+        }
+    }
+
+    /// The frame's size, samples and algorithm, where they differ from the scene's.
+    pub fn options(mut self, options: RenderOptions) -> Job<'a> {
+        self.options = options;
+        self
+    }
+
+    /// Calls `f` with each [`Event`] as it happens (progress at each band).
+    pub fn on_event(mut self, f: impl FnMut(Event<'_>) + 'a) -> Job<'a> {
+        self.events = Box::new(f);
+        self
+    }
+
+    /// Renders the frame on `renderer` and writes it to the output.
+    pub fn run(self, renderer: &Renderer) -> Result<RenderReport, RenderError> {
+        let start = Instant::now();
+        let Job {
+            scene,
+            output,
+            options,
+            mut events,
+        } = self;
+        let mut run = Run {
+            events: &mut *events,
+            warnings: Vec::new(),
+            notes: Vec::new(),
+        };
+        let (mut owned, borrowed) = match scene {
+            Source::Owned(s) => (Some(s), None),
+            Source::Borrowed(s) => (None, Some(s)),
+        };
+        let (w, h, algo) = prepare(pick(&owned, borrowed), &output, &options, &mut run)?;
+        // Only the f64 tracer reads the scene's primitives once they are flat, so the
+        // others take them from a scene of the job's own (the dragon's are 35 MB, a sixth
+        // of the former peak).
+        let mut buf = match owned.as_deref_mut() {
+            Some(s) if !matches!(renderer.tracer(), Tracer::CpuF64) => {
+                SceneBuffers::from_scene_taking(s, w, h, algo)
+            }
+            _ => SceneBuffers::new(pick(&owned, borrowed), w, h, algo),
+        };
+        let scene = pick(&owned, borrowed);
+        if let Some(n) = options.samples {
+            buf.params.samples = n.clamp(1, crate::scene::MAX_SAMPLES);
+        }
+        run.drain_cache();
+        if let Some(note) = renderer.note() {
+            run.note(Note::Backend(note.to_string()));
+        }
+        let mut sink = Sink::open(&output, w, h)?;
+        let traced = trace(renderer, scene, &mut buf, &mut sink, &mut run)?;
+        let image = crate::stages::time("write", || sink.finish(&output))?;
+        let t_wait = Instant::now();
+        if crate::cache::finish_writes() > 0 {
+            crate::stages::record("cache wait", t_wait.elapsed());
+        }
+        run.drain_cache();
+        crate::stages::record("trace", traced.frame);
+        Ok(RenderReport {
+            output,
+            width: w,
+            height: h,
+            triangles: buf.params.n_triangles,
+            spheres: buf.spheres.len(),
+            algorithm: algo,
+            tracer: traced.tracer,
+            description: traced.description,
+            frame: traced.frame,
+            gpu: traced.gpu,
+            warnings: run.warnings,
+            notes: run.notes,
+            stages: crate::stages::take(),
+            total: start.elapsed(),
+            image,
+        })
+    }
+}
+
+/// The job's scene: its own, else the caller's.
+fn pick<'s>(owned: &'s Option<Box<Scene>>, borrowed: Option<&'s Scene>) -> &'s Scene {
+    match (owned, borrowed) {
+        (Some(s), _) => s,
+        (None, Some(s)) => s,
+        (None, None) => unreachable!("a job has a scene"),
+    }
+}
+
+/// The checks before any work: the output does not overwrite the scene, the scene's and
+/// the range's warnings, and the frame fits in memory; the frame's size and algorithm.
+fn prepare(
+    scene: &Scene,
+    output: &Output,
+    options: &RenderOptions,
+    run: &mut Run<'_, '_>,
+) -> Result<(u32, u32, TriangleAlgorithm), RenderError> {
+    if let Some(p) = output.path()
+        && same_file(&scene.path, p)
+    {
+        return Err(RenderError::OverwritesScene(p.to_owned()));
+    }
+    for w in &scene.warnings {
+        run.warn(Warning::Scene(w.clone()));
+    }
+    let (w, h) = options.size.unwrap_or(scene.size());
+    let algo = options.triangle.unwrap_or(scene.triangle);
+    for m in crate::stages::time("checks", || scene.range_warnings(algo)) {
+        run.warn(Warning::Range(m));
+    }
+    let band = band_rows(w, h, GPU_BAND_MIB);
+    super::check_memory(w, h, output.bytes_at_once(w, h, band))?;
+    Ok((w, h, algo))
+}
+
+/// What [`trace`] did.
+struct Traced {
+    tracer: TracerKind,
+    description: String,
+    frame: Duration,
+    gpu: Option<GpuTimings>,
+}
+
+/// Traces the frame into `sink` on the renderer's tracer; `auto`'s GPU falls back to the
+/// CPU where the scene is too large for it.
+fn trace(
+    renderer: &Renderer,
+    scene: &Scene,
+    buf: &mut SceneBuffers,
+    sink: &mut Sink,
+    run: &mut Run<'_, '_>,
+) -> Result<Traced, RenderError> {
+    let spec = Specialisation::for_scene(buf);
+    let cpu = |f64: bool, buf: &SceneBuffers, sink: &mut Sink, run: &mut Run<'_, '_>| {
+        let frame = cpu_bands(f64.then_some(scene), buf, spec, sink, run)?;
+        Ok::<_, RenderError>(Traced {
+            tracer: if f64 {
+                TracerKind::CpuF64
+            } else {
+                TracerKind::CpuF32
+            },
+            description: if f64 {
+                "cpu-f64".to_string()
+            } else {
+                crate::cpu::describe_f32()
+            },
+            frame,
+            gpu: None,
+        })
+    };
+    match renderer.tracer() {
+        Tracer::Cpu => cpu(false, buf, sink, run),
+        Tracer::CpuF64 => cpu(true, buf, sink, run),
+        Tracer::Gpu(gpu) | Tracer::GpuRq(gpu) => {
+            let rq = matches!(renderer.tracer(), Tracer::GpuRq(_));
+            match gpu_bands(gpu, rq, buf, spec, sink, run) {
+                Err(RenderError::Gpu(e @ GpuError::TooLarge { .. }))
+                    if renderer.backend() == super::Backend::Auto =>
+                {
+                    // Too large for this device's buffers: the CPU has no such limit.
+                    run.note(Note::Fallback(e));
+                    cpu(false, buf, sink, run)
+                }
+                other => other,
+            }
+        }
+    }
+}
+
+/// The frame on a CPU tracer (f64 where `scene` is given), in bands written to `sink` as
+/// they come; the time spent tracing.
+fn cpu_bands(
+    f64_scene: Option<&Scene>,
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    sink: &mut Sink,
+    run: &mut Run<'_, '_>,
+) -> Result<Duration, ImageError> {
+    let (w, h) = (buf.params.width, buf.params.height);
+    let rows_per_band = band_rows(w, h, CPU_BAND_MIB);
+    let mut frame = Duration::ZERO;
+    let mut y = 0;
+    while y < h {
+        let rows = rows_per_band.min(h - y);
+        let t = Instant::now();
+        let px = match f64_scene {
+            Some(s) => crate::cpu::render_f64_rows(s, buf, spec, y, rows),
+            None => crate::cpu::render_f32_rows(buf, spec, y, rows),
+        };
+        frame += t.elapsed();
+        crate::stages::time("encode", || sink.write_rows(&px))?;
+        y += rows;
+        (run.events)(Event::Rows { done: y, total: h });
+    }
+    Ok(frame)
+}
+
+/// The frame on the GPU (the ray-query tracer where `rq`), in tiles written to `sink` as
+/// they are read back. A PNG's tiles are packed to 8 bits by the shader, and the host's
+/// geometry is freed once uploaded (except where the upload fails, so the CPU can still
+/// trace `buf`).
+fn gpu_bands(
+    gpu: &Gpu,
+    rq: bool,
+    buf: &mut SceneBuffers,
+    spec: Specialisation,
+    sink: &mut Sink,
+    run: &mut Run<'_, '_>,
+) -> Result<Traced, RenderError> {
+    let (w, h) = (buf.params.width, buf.params.height);
+    let band = band_rows(w, h, GPU_BAND_MIB);
+    let kernel = if rq {
+        gpu.ray_query_kernel()?
+    } else {
+        gpu.compute_kernel(spec)?
+    };
+    let mut written: Result<(), ImageError> = Ok(());
+    let mut rows = |y: u32, n: usize, write: &mut dyn FnMut() -> Result<(), ImageError>| {
+        if written.is_ok() {
+            written = crate::stages::time("encode", write);
+        }
+        let done = y + (n / w as usize) as u32;
+        (run.events)(Event::Rows { done, total: h });
+    };
+    let t = match sink {
+        Sink::Png(png) => kernel.render_bands_rgba8_releasing(
+            &gpu.device,
+            &gpu.queue,
+            buf,
+            spec,
+            band,
+            &mut |y, px| rows(y, px.len(), &mut || png.write_rgba8_rows(px)),
+        ),
+        Sink::Frame(..) => {
+            kernel.render_bands(&gpu.device, &gpu.queue, buf, spec, band, &mut |y, px| {
+                rows(y, px.len(), &mut || sink.write_rows(px))
+            })
+        }
+    }?;
+    written?;
+    let accel = if rq {
+        format!(
+            " acceleration structure {:.1} ms,",
+            t.accel.as_secs_f64() * 1e3
+        )
+    } else {
+        String::new()
+    };
+    let description = format!(
+        "{}: {} (device {:.0} ms, compile {:.0} ms,{accel} trace {:.1} ms, readback {:.1} ms)",
+        if rq {
+            "gpu-rq".to_string()
+        } else {
+            format!("gpu (traversal: {})", kernel.traversal_name())
+        },
+        gpu.describe(),
+        gpu.start_time.as_secs_f64() * 1e3,
+        t.compile.as_secs_f64() * 1e3,
+        t.trace.as_secs_f64() * 1e3,
+        t.readback.as_secs_f64() * 1e3
+    );
+    Ok(Traced {
+        tracer: if rq {
+            TracerKind::GpuRq
+        } else {
+            TracerKind::Gpu
+        },
+        description,
+        frame: t.trace + t.readback,
+        gpu: Some(t),
+    })
+}
+
+fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
+}

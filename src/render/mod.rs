@@ -1,0 +1,35 @@
+//! The library's pipeline: what `glint render` and `glint compare` do, for any caller.
+//!
+//! - [`Renderer`]: a backend resolved to a tracer (the `auto` policy), holding its device.
+//! - [`Job`]: one frame of a scene on a renderer, streamed into an [`Output`] (a PNG written
+//!   band by band, an EXR, or memory), with `auto`'s fallback to the CPU when the scene is
+//!   too large for the GPU, the cache's lifecycle, typed [`Warning`]s and [`Note`]s as they
+//!   happen, progress, and the timings in a [`RenderReport`].
+//! - [`compare()`]: the GPU against its CPU mirror and both against the f64 ground truth, as
+//!   a [`CompareReport`].
+//!
+//! ```no_run
+//! use glint::render::{Job, Output};
+//! use glint::{Backend, Renderer, scene::Scene};
+//! let renderer = Renderer::new(Backend::Auto)?;
+//! let scene = Scene::load("scenes/bb8.toml")?;
+//! let report = Job::new(scene, Output::file("bb8.png")?)
+//!     .on_event(|e| eprintln!("{e}"))
+//!     .run(&renderer)?;
+//! println!("{report}");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod compare;
+mod job;
+mod memory;
+mod output;
+mod renderer;
+
+pub use compare::{CompareReport, RayQueryResult, compare};
+pub use job::{Event, Job, Note, RenderReport, Warning};
+pub use memory::check_memory;
+pub use output::Output;
+pub use renderer::{
+    Backend, RenderError, RenderOptions, Renderer, Tracer, TracerKind, UnknownBackend,
+};
