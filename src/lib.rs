@@ -33,4 +33,6 @@ pub mod render;
 pub mod scene;
 pub mod stages;
 
-pub use render::{Backend, RenderError, RenderOptions, Renderer, Tracer, UnknownBackend};
+pub use render::{
+    Backend, RenderError, RenderOptions, Renderer, Tracer, TracerKind, UnknownBackend,
+};

@@ -280,7 +280,7 @@ impl<'a> Job<'a> {
         }
         let mut sink = Sink::open(&output, w, h)?;
         let traced = trace(renderer, scene, &mut buf, &mut sink, &mut run)?;
-        let image = crate::stages::time("write", || sink.finish(&output))?;
+        let image = crate::stages::time("write", || sink.finish())?;
         let t_wait = Instant::now();
         if crate::cache::finish_writes() > 0 {
             crate::stages::record("cache wait", t_wait.elapsed());
@@ -460,7 +460,7 @@ fn gpu_bands(
             band,
             &mut |y, px| rows(y, px.len(), &mut || png.write_rgba8_rows(px)),
         ),
-        Sink::Frame(..) => {
+        Sink::Exr(..) | Sink::Frame(..) => {
             kernel.render_bands(&gpu.device, &gpu.queue, buf, spec, band, &mut |y, px| {
                 rows(y, px.len(), &mut || sink.write_rows(px))
             })

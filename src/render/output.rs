@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::image::{Format, Image, ImageError, PngStream};
+use crate::image::{ExrStream, Format, Image, ImageError, PngStream};
 
 /// Where a render's pixels go.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -11,8 +11,9 @@ pub enum Output {
     /// whatever the frame's size. The GPU packs the bytes itself (a quarter of the
     /// readback).
     Png(PathBuf),
-    /// An OpenEXR file, the f32 image exactly with the hit distance t in alpha: the frame
-    /// is held whole and written at the end.
+    /// An OpenEXR file, the f32 image exactly with the hit distance t in alpha, written row
+    /// by row as the rows come (uncompressed, [`crate::image::ExrStream`]): memory stays
+    /// one band, whatever the frame's size.
     Exr(PathBuf),
     /// The f32 image in memory, handed back in [`super::RenderReport::image`].
     Memory,
@@ -39,22 +40,22 @@ impl Output {
     }
 
     /// The bytes a `w`×`h` frame holds at once on the way to this output, bands of `band`
-    /// rows: for a PNG one band of f32 pixels and its bytes; else the whole frame (and, for
-    /// an EXR, the encoder's copy of it).
+    /// rows: for a file one band of f32 pixels and its encoding; in memory the whole frame.
     pub(crate) fn bytes_at_once(&self, w: u32, h: u32, band: u32) -> u64 {
-        let frame = w as u64 * h as u64 * 16;
         match self {
             Output::Png(_) => band as u64 * w as u64 * (16 + 3),
-            Output::Exr(_) => frame * 2,
-            Output::Memory => frame,
+            Output::Exr(_) => band as u64 * w as u64 * 16 + (1 << 20),
+            Output::Memory => w as u64 * h as u64 * 16,
         }
     }
 }
 
-/// An open output: a PNG being streamed, or the whole f32 image being filled.
+/// An open output: a file being streamed, or the whole f32 image being filled.
 pub(crate) enum Sink {
     /// The PNG's encoder.
     Png(Box<PngStream>),
+    /// The EXR's writer.
+    Exr(Box<ExrStream>),
     /// The frame, and how many of its pixels are written.
     Frame(Image, usize),
 }
@@ -64,7 +65,8 @@ impl Sink {
     pub(crate) fn open(output: &Output, w: u32, h: u32) -> Result<Sink, ImageError> {
         Ok(match output {
             Output::Png(path) => Sink::Png(Box::new(PngStream::create(path, w, h)?)),
-            Output::Exr(_) | Output::Memory => Sink::Frame(Image::new(w, h, [0.0; 4]), 0),
+            Output::Exr(path) => Sink::Exr(Box::new(ExrStream::create(path, w, h)?)),
+            Output::Memory => Sink::Frame(Image::new(w, h, [0.0; 4]), 0),
         })
     }
 
@@ -72,6 +74,7 @@ impl Sink {
     pub(crate) fn write_rows(&mut self, px: &[[f32; 4]]) -> Result<(), ImageError> {
         match self {
             Sink::Png(p) => p.write_rows(px),
+            Sink::Exr(e) => e.write_rows(px),
             Sink::Frame(img, at) => {
                 img.pixels[*at..*at + px.len()].copy_from_slice(px);
                 *at += px.len();
@@ -80,13 +83,12 @@ impl Sink {
         }
     }
 
-    /// Finishes the file (the PNG's last bytes, or the EXR written whole); the frame for
-    /// [`Output::Memory`].
-    pub(crate) fn finish(self, output: &Output) -> Result<Option<Image>, ImageError> {
-        match (self, output) {
-            (Sink::Png(p), _) => p.finish().map(|_| None),
-            (Sink::Frame(img, _), Output::Exr(path)) => img.save_exr(path).map(|_| None),
-            (Sink::Frame(img, _), _) => Ok(Some(img)),
+    /// Finishes the file (renamed over the output); the frame for [`Output::Memory`].
+    pub(crate) fn finish(self) -> Result<Option<Image>, ImageError> {
+        match self {
+            Sink::Png(p) => p.finish().map(|_| None),
+            Sink::Exr(e) => e.finish().map(|_| None),
+            Sink::Frame(img, _) => Ok(Some(img)),
         }
     }
 }

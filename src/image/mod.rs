@@ -1,6 +1,10 @@
 //! Images: linear f32 RGB plus the hit distance per pixel, 8-bit output, and PNG files
 //! written so that an interrupted render never leaves half an image.
 
+mod exr;
+
+pub use exr::ExrStream;
+
 use std::path::{Path, PathBuf};
 
 /// A rendered frame: per pixel `[r, g, b, t]`, colours linear in [0, 1], `t` the hit
@@ -344,7 +348,7 @@ impl Image {
 
 /// The temporary file being written now, if any: removed by [`remove_pending_temp`] (the
 /// command line calls it on SIGINT and SIGTERM).
-static PENDING_TEMP: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+pub(crate) static PENDING_TEMP: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
 
 /// Removes the temporary file that [`write_atomically`] is writing, if any. Safe to call
 /// from a signal-handling thread; the finished output file is never touched.
@@ -371,7 +375,7 @@ pub fn write_target(path: &Path) -> PathBuf {
 
 /// The temporary name beside `target`: `.NAME.PID.KIND`, with NAME shortened so the whole
 /// stays within the 255-byte file name limit of common file systems.
-fn temp_path(target: &Path, kind: &str) -> PathBuf {
+pub(crate) fn temp_path(target: &Path, kind: &str) -> PathBuf {
     let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
