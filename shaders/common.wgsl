@@ -1,10 +1,10 @@
-// glint's kernel, part 1 of 3: what the parts share. The override constants, the
+// glint's kernel, part 1 of 4: what the parts share. The override constants, the
 // constants, the structs shared with Rust and their bindings, the ray and hit records and
 // the small helpers.
 //
-// The kernel is `common.wgsl` + `prims.wgsl` + `trace.wgsl`, joined in that order at build
+// The kernel is `common.wgsl` + `prims.wgsl` + `trace.wgsl` + `whitted.wgsl`, joined in that order at build
 // time (`src/gpu/mod.rs`, `SHADER_SOURCE`). Each part has its mirror in `src/cpu/` with the
-// same stem (`common.rs`, `prims.rs`, `trace.rs`): every function, with the same name, in
+// same stem (`common.rs`, `prims.rs`, `trace.rs`, `whitted.rs`): every function, with the same name, in
 // the same order, with the same operations in the same order. Change both in one commit;
 // the GPU-against-CPU tests catch the one that was forgotten.
 //
@@ -40,6 +40,8 @@ override USE_BVH: bool = true;
 override SMOOTH: bool = false;
 /// `params.samples`² rays a pixel (else one through its centre).
 override ANTIALIAS: bool = false;
+/// Some material reflects or transmits (kr or kt) and `max_depth` > 0: secondary rays.
+override WHITTED: bool = false;
 
 // ---- constants (each one's story is in `src/buffers.rs`) ------------------------------
 
@@ -82,7 +84,11 @@ struct Params {
     tile_height: u32,
     n_nodes: u32,
     samples: u32,
+    max_depth: u32,
+    min_weight: f32,
     _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Sphere {
@@ -126,6 +132,10 @@ struct Material {
     n: f32,
     ks: vec3<f32>,
     n_int: i32,
+    kr: vec3<f32>,
+    ior: f32,
+    kt: vec3<f32>,
+    fresnel: u32,
 }
 
 struct Light {

@@ -1,4 +1,4 @@
-// glint's kernel, part 3 of 3: rays through the scene (after `common.wgsl` and
+// glint's kernel, part 3 of 4: rays through the scene (after `common.wgsl` and
 // `prims.wgsl`; see the first's header for how the parts are joined and mirrored). The
 // camera, the searches for the nearest hit and for a blocker (every primitive, or the
 // BVH), shading, and the entry points. Mirror: `src/cpu/trace.rs`.
@@ -355,7 +355,11 @@ fn trace_sample(i: u32, j: u32, dx: f32, dy: f32) -> vec4<f32> {
     if hit.prim == PRIM_NONE {
         return vec4<f32>(params.background, -1.0);
     }
-    return vec4<f32>(shade(ray, hit), hit.t);
+    let local = shade(ray, hit);
+    if WHITTED {
+        return vec4<f32>(secondary(ray, hit, local), hit.t);
+    }
+    return vec4<f32>(local, hit.t);
 }
 
 /// The position of sample s of n along a pixel side: (s + 0.5) / n.

@@ -108,6 +108,8 @@ impl SceneBuffers {
             tile_width: width,
             tile_height: height,
             samples: cam.samples,
+            max_depth: scene.max_depth,
+            min_weight: scene.min_weight,
             ..Params::default()
         };
         let materials: Vec<Material> = scene
@@ -124,6 +126,10 @@ impl SceneBuffers {
                 n: m.n,
                 ks: flush_colour(m.ks),
                 n_int: exponent_as_int(m.n),
+                kr: flush_colour(m.optics.kr),
+                ior: m.optics.ior,
+                kt: flush_colour(m.optics.kt),
+                fresnel: m.optics.fresnel as u32,
             })
             .collect();
         let spheres: Vec<Sphere> = scene
@@ -260,6 +266,9 @@ pub struct Specialisation {
     pub smooth: bool,
     /// WGSL `ANTIALIAS`: `params.samples`² rays per pixel (else one through the centre).
     pub antialias: bool,
+    /// WGSL `WHITTED`: some material has kr or kt and `params.max_depth` > 0, so secondary
+    /// rays are traced.
+    pub whitted: bool,
 }
 
 /// Scenes with at most this many primitives are traced by testing every primitive: a
@@ -279,6 +288,11 @@ impl Specialisation {
             use_bvh: buf.spheres.len() + buf.triangles.len() > BRUTE_FORCE_MAX,
             smooth: !buf.normals.is_empty(),
             antialias: buf.params.samples > 1,
+            whitted: buf.params.max_depth > 0
+                && buf
+                    .materials
+                    .iter()
+                    .any(|m| m.kr.iter().chain(&m.kt).any(|&k| k > 0.0)),
         }
     }
 
@@ -297,6 +311,7 @@ impl Specialisation {
             use_bvh: true,
             smooth: true,
             antialias: true,
+            whitted: true,
         }
     }
 
@@ -306,7 +321,7 @@ impl Specialisation {
     }
 
     /// The `(name, value)` pairs for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 9] {
+    pub fn constants(&self) -> [(&'static str, f64); 10] {
         let b = |x: bool| if x { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -318,6 +333,7 @@ impl Specialisation {
             ("USE_BVH", b(self.use_bvh)),
             ("SMOOTH", b(self.smooth)),
             ("ANTIALIAS", b(self.antialias)),
+            ("WHITTED", b(self.whitted)),
         ]
     }
 }

@@ -73,6 +73,7 @@ fn run(cli: Cli) -> Result<()> {
             no_gpu,
             triangle,
             samples,
+            max_depth,
         } => {
             let options = glint::bench::Options {
                 size: Some(size),
@@ -85,7 +86,7 @@ fn run(cli: Cli) -> Result<()> {
                 },
                 gpu: gpu_options(common.adapter.as_deref()),
             };
-            bench(scenes, samples, &options, common.confine, &out)
+            bench(scenes, samples, max_depth, &options, common.confine, &out)
         }
     }
 }
@@ -104,6 +105,7 @@ fn options(frame: FrameArgs) -> RenderOptions {
         size: frame.size,
         triangle: frame.triangle,
         samples: frame.samples,
+        max_depth: frame.max_depth,
     }
 }
 
@@ -239,6 +241,7 @@ fn adapters() -> Result<()> {
 fn bench(
     scenes: Vec<PathBuf>,
     samples: Option<u32>,
+    max_depth: Option<u32>,
     options: &glint::bench::Options,
     confine: bool,
     out: &Path,
@@ -265,6 +268,7 @@ fn bench(
             eprintln!("warning: {w}");
         }
         s.camera.samples = samples.unwrap_or(s.camera.samples);
+        s.max_depth = max_depth.unwrap_or(s.max_depth);
         list.push((name, s));
     }
     let report = glint::bench::run(&list, options, &mut |done, total, label| {

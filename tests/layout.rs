@@ -84,7 +84,11 @@ fn shared_structs_match_wgsl() {
             tile_height,
             n_nodes,
             samples,
-            _pad0
+            max_depth,
+            min_weight,
+            _pad0,
+            _pad1,
+            _pad2
         ]
     );
     check_struct!(
@@ -105,7 +109,12 @@ fn shared_structs_match_wgsl() {
         "VertexNormals",
         [na, _pad0, nb, _pad1, nc, _pad2]
     );
-    check_struct!(&m, Material, "Material", [ka, model, kd, n, ks, n_int]);
+    check_struct!(
+        &m,
+        Material,
+        "Material",
+        [ka, model, kd, n, ks, n_int, kr, ior, kt, fresnel]
+    );
     check_struct!(&m, BvhNode, "BvhNode", [lo, first, hi, count_axis]);
     check_struct!(&m, Light, "Light", [position, _pad0, color, _pad1]);
     check_struct!(&m, RayIn, "RayIn", [origin, t_min, dir, t_max]);
@@ -186,6 +195,7 @@ fn shader_constants_match_rust() {
         use_bvh: true,
         smooth: true,
         antialias: true,
+        whitted: true,
     };
     for (name, _) in spec.constants() {
         assert!(

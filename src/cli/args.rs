@@ -71,6 +71,10 @@ pub struct FrameArgs {
     /// Antialiasing: N×N samples a pixel (default: the scene camera's `samples`).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=glint::scene::MAX_SAMPLES as i64))]
     pub samples: Option<u32>,
+    /// The most reflections plus refractions along a path (default: the scene's
+    /// `max_depth`; 0: local shading only).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=glint::scene::MAX_DEPTH as i64))]
+    pub max_depth: Option<u32>,
 }
 
 /// The subcommands.
@@ -145,6 +149,10 @@ pub enum Command {
         /// Only this triangle algorithm (default: all three where a scene has triangles).
         #[arg(long)]
         triangle: Option<TriangleAlgorithm>,
+        /// The most reflections plus refractions along a path, for every scene (default:
+        /// each scene's own).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(0..=glint::scene::MAX_DEPTH as i64))]
+        max_depth: Option<u32>,
         /// Antialiasing for every scene: N×N samples a pixel (default: each scene's own).
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=glint::scene::MAX_SAMPLES as i64))]
         samples: Option<u32>,

@@ -7,6 +7,7 @@ pub mod prims;
 /// The numeric kernel ([`crate::kernel::real`]), where the mirror's arithmetic lives.
 pub use crate::kernel::real;
 pub mod trace;
+pub mod whitted;
 
 use std::sync::atomic::{AtomicU32, Ordering};
 

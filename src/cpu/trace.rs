@@ -423,8 +423,12 @@ pub fn trace_sample<R: Real>(g: &Globals<R>, i: u32, j: u32, dx: R, dy: R) -> [R
         let bg = V3::<R>::from_f32(g.buf.params.background);
         return [bg.x, bg.y, bg.z, -R::ONE];
     }
-    let c = shade(g, ray, &hit);
-    [c.x, c.y, c.z, hit.t]
+    let local = shade(g, ray, &hit);
+    if g.spec.whitted {
+        let c = super::whitted::secondary(g, ray, &hit, local);
+        return [c.x, c.y, c.z, hit.t];
+    }
+    [local.x, local.y, local.z, hit.t]
 }
 
 /// WGSL `sample_offset`: (s + 0.5) / n, the position of sample s of n along a

@@ -108,8 +108,18 @@ pub struct Params {
     /// Samples per pixel side: N gives N×N rays per pixel, read only when the pipeline's
     /// `ANTIALIAS` is on (N > 1); 1 is one ray through the pixel's centre. Offset 120.
     pub samples: u32,
-    /// Offset 124.
+    /// The most reflections plus refractions along a path (the scene's `max_depth`), read
+    /// only when the pipeline's `WHITTED` is on. Offset 124.
+    pub max_depth: u32,
+    /// A secondary ray whose weight's largest channel is below this is not traced (the
+    /// scene's `min_weight`; 0 traces every one). Offset 128.
+    pub min_weight: f32,
+    /// Offset 132.
     pub _pad0: u32,
+    /// Offset 136.
+    pub _pad1: u32,
+    /// Offset 140.
+    pub _pad2: u32,
 }
 
 /// A sphere. Must match WGSL `struct Sphere` (32 bytes).
@@ -186,7 +196,7 @@ pub struct BvhNode {
     pub count_axis: u32,
 }
 
-/// A material. Must match WGSL `struct Material` (48 bytes).
+/// A material. Must match WGSL `struct Material` (80 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Material {
@@ -203,6 +213,15 @@ pub struct Material {
     /// `n` as an integer when it is one (0..=2^24), else −1: then the power is taken by
     /// squaring, identically on both tracers. Offset 44.
     pub n_int: i32,
+    /// Mirror reflectance, kr. Offset 48.
+    pub kr: [f32; 3],
+    /// Index of refraction (1 where the material transmits nothing). Offset 60.
+    pub ior: f32,
+    /// Transmittance, kt. Offset 64.
+    pub kt: [f32; 3],
+    /// 1: kr and kt are weighted by the dielectric Fresnel reflectance F (kr·F, kt·(1 − F));
+    /// 0: used as given. Offset 76.
+    pub fresnel: u32,
 }
 
 /// A point light. Must match WGSL `struct Light` (32 bytes).

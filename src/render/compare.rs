@@ -75,9 +75,7 @@ pub fn compare(
     warnings.extend(scene.range_warnings(algo).into_iter().map(Warning::Range));
     super::check_memory(w, h, w as u64 * h as u64 * 16 * 4)?;
     let mut buf = SceneBuffers::new(scene, w, h, algo);
-    if let Some(n) = options.samples {
-        buf.params.samples = n.clamp(1, crate::scene::MAX_SAMPLES);
-    }
+    options.apply(&mut buf);
     let spec = Specialisation::for_scene(&buf);
     let kernel = gpu.compute_kernel(spec)?;
     let (g, _) = kernel.render(&gpu.device, &gpu.queue, &buf, spec, &mut |_, _| {})?;

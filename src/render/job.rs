@@ -271,9 +271,7 @@ impl<'a> Job<'a> {
             _ => SceneBuffers::new(pick(&owned, borrowed), w, h, algo),
         };
         let scene = pick(&owned, borrowed);
-        if let Some(n) = options.samples {
-            buf.params.samples = n.clamp(1, crate::scene::MAX_SAMPLES);
-        }
+        options.apply(&mut buf);
         run.drain_cache();
         if let Some(note) = renderer.note() {
             run.note(Note::Backend(note.to_string()));

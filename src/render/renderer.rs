@@ -90,6 +90,21 @@ pub struct RenderOptions {
     /// Antialiasing, N×N samples a pixel, clamped to 1..=[`crate::scene::MAX_SAMPLES`]
     /// (default: the scene camera's `samples`).
     pub samples: Option<u32>,
+    /// The most reflections plus refractions along a path, clamped to
+    /// 0..=[`crate::scene::MAX_DEPTH`] (default: the scene's `max_depth`).
+    pub max_depth: Option<u32>,
+}
+
+impl RenderOptions {
+    /// Sets `buf`'s frame values that these options override (samples, depth).
+    pub(crate) fn apply(&self, buf: &mut crate::buffers::SceneBuffers) {
+        if let Some(n) = self.samples {
+            buf.params.samples = n.clamp(1, crate::scene::MAX_SAMPLES);
+        }
+        if let Some(d) = self.max_depth {
+            buf.params.max_depth = d.min(crate::scene::MAX_DEPTH);
+        }
+    }
 }
 
 /// Why a render failed.

@@ -22,6 +22,10 @@ pub struct SceneFile {
     pub triangle: Option<Spanned<String>>,
     /// Hard shadows.
     pub shadows: Option<bool>,
+    /// The most reflections plus refractions along a path (0..=16, default 5).
+    pub max_depth: Option<Spanned<i64>>,
+    /// Secondary rays of a smaller weight are not traced (≥ 0, default 1/255).
+    pub min_weight: Option<Spanned<f32>>,
     /// The camera.
     pub camera: Spanned<CameraFile>,
     /// Point lights.
@@ -85,6 +89,14 @@ pub struct MaterialFile {
     pub ks: Option<Vec3File>,
     /// Phong exponent (needed by `phong`).
     pub n: Option<Spanned<f32>>,
+    /// Mirror reflectance.
+    pub kr: Option<Vec3File>,
+    /// Transmittance (needs `ior`).
+    pub kt: Option<Vec3File>,
+    /// Index of refraction, > 0.
+    pub ior: Option<Spanned<f32>>,
+    /// Weight kr and kt by the dielectric Fresnel reflectance.
+    pub fresnel: Option<bool>,
 }
 
 /// `[[spheres]]`.

@@ -423,6 +423,7 @@ pub(super) fn load(
             kd,
             ks,
             n,
+            optics: super::Optics::default(),
         });
     }
 

@@ -133,7 +133,46 @@ pub struct Material {
     pub ks: [f32; 3],
     /// Phong exponent, ≥ 0.
     pub n: f32,
+    /// What it does to secondary rays (nothing by default).
+    pub optics: Optics,
 }
+
+/// What a material does to secondary rays (Whitted): the local terms stay what they are,
+/// and kr·L(reflected) + kt·L(refracted) is added.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Optics {
+    /// Mirror reflectance.
+    pub kr: [f32; 3],
+    /// Transmittance.
+    pub kt: [f32; 3],
+    /// Index of refraction (the outside medium is 1), > 0.
+    pub ior: f32,
+    /// Weights kr·F and kt·(1 − F), F the exact unpolarised dielectric Fresnel
+    /// reflectance; else kr and kt as given.
+    pub fresnel: bool,
+}
+
+impl Default for Optics {
+    /// No reflection, no transmission, index 1, no Fresnel.
+    fn default() -> Optics {
+        Optics {
+            kr: [0.0; 3],
+            kt: [0.0; 3],
+            ior: 1.0,
+            fresnel: false,
+        }
+    }
+}
+
+/// The default `max_depth`: the most reflections plus refractions along a path.
+pub const DEFAULT_MAX_DEPTH: u32 = 5;
+
+/// The largest `max_depth` (the shader's stack holds max_depth + 1 rays).
+pub const MAX_DEPTH: u32 = crate::cpu::whitted::MAX_DEPTH;
+
+/// The default `min_weight`, 1/255 (POV-Ray's adaptive depth control): a secondary ray
+/// whose weight's largest channel is below it is not traced.
+pub const DEFAULT_MIN_WEIGHT: f32 = 1.0 / 255.0;
 
 /// A sphere.
 #[derive(Clone, Debug, PartialEq)]
@@ -177,6 +216,10 @@ pub struct Scene {
     pub triangle: TriangleAlgorithm,
     /// Hard shadows on.
     pub shadows: bool,
+    /// The most reflections plus refractions along a path, 0..=[`MAX_DEPTH`].
+    pub max_depth: u32,
+    /// Secondary rays of a smaller weight (largest channel) are not traced; ≥ 0.
+    pub min_weight: f32,
     /// The camera.
     pub camera: Camera,
     /// Point lights.
@@ -665,6 +708,8 @@ impl Validator<'_> {
             background,
             triangle,
             shadows: f.shadows.unwrap_or(false),
+            max_depth: self.max_depth(&f.max_depth)?,
+            min_weight: self.min_weight(&f.min_weight)?,
             camera,
             lights,
             materials,
@@ -818,6 +863,66 @@ impl Validator<'_> {
             kd,
             ks,
             n,
+            optics: self.optics(name, m)?,
         })
+    }
+
+    /// A material's `kr`, `kt`, `ior` and `fresnel`: `ior` is needed with `kt`.
+    fn optics(&self, name: &str, m: &format::MaterialFile) -> Result<Optics, SceneError> {
+        let key = |k: &str| format!("materials.{name}.{k}");
+        let d = Optics::default();
+        let kr = m.kr.as_ref().map_or(Ok(d.kr), |v| self.colour(v, &key("kr")))?;
+        let kt = m.kt.as_ref().map_or(Ok(d.kt), |v| self.colour(v, &key("kt")))?;
+        let ior = match (&m.ior, &m.kt) {
+            (Some(i), _) => {
+                let x = *i.get_ref();
+                if !(x.is_finite() && x > 0.0) {
+                    return self.err(i.span(), &key("ior"), format!("{x} must be finite and > 0"));
+                }
+                x
+            }
+            (None, Some(kt)) => {
+                return self.err(
+                    kt.span(),
+                    &key("ior"),
+                    "missing: kt (transmittance) needs an index of refraction".into(),
+                );
+            }
+            (None, None) => d.ior,
+        };
+        Ok(Optics {
+            kr,
+            kt,
+            ior,
+            fresnel: m.fresnel.unwrap_or(d.fresnel),
+        })
+    }
+
+    /// The scene's `max_depth`, 0..=[`MAX_DEPTH`] (default [`DEFAULT_MAX_DEPTH`]).
+    fn max_depth(&self, v: &Option<Spanned<i64>>) -> Result<u32, SceneError> {
+        match v {
+            None => Ok(DEFAULT_MAX_DEPTH),
+            Some(v) => {
+                let x = *v.get_ref();
+                if !(0..=MAX_DEPTH as i64).contains(&x) {
+                    return self.err(v.span(), "max_depth", format!("{x} is not in 0..={MAX_DEPTH}"));
+                }
+                Ok(x as u32)
+            }
+        }
+    }
+
+    /// The scene's `min_weight`, finite and ≥ 0 (default [`DEFAULT_MIN_WEIGHT`]).
+    fn min_weight(&self, v: &Option<Spanned<f32>>) -> Result<f32, SceneError> {
+        match v {
+            None => Ok(DEFAULT_MIN_WEIGHT),
+            Some(v) => {
+                let x = *v.get_ref();
+                if !(x.is_finite() && x >= 0.0) {
+                    return self.err(v.span(), "min_weight", format!("{x} must be finite and ≥ 0"));
+                }
+                Ok(x)
+            }
+        }
     }
 }

@@ -665,6 +665,16 @@ pub(super) fn sample_packet<B: Build>(
             out[l] = [colors[0][l], colors[1][l], colors[2][l], found.t[l]];
         }
     }
+    if g.spec.whitted {
+        // Secondary rays are incoherent: each lane's go through the mirror's own walk.
+        for l in 0..LANES {
+            if found.prim[l] != PRIM_NONE && (active >> l) & 1 != 0 {
+                let local = V3::new(out[l][0], out[l][1], out[l][2]);
+                let c = crate::cpu::whitted::secondary(g, rays[l], &found.hit(l), local);
+                out[l] = [c.x, c.y, c.z, found.t[l]];
+            }
+        }
+    }
     out
 }
 

@@ -1,0 +1,167 @@
+//! The CPU mirror of `shaders/whitted.wgsl`: Whitted's secondary rays, a depth-first walk
+//! with a stack of rays that carry premultiplied weights (see the shader's header for the
+//! model: Fresnel, total internal reflection, the side rule, the origins, `min_weight`).
+
+// `!(x > 0)` is not `x <= 0` for NaN; the shader writes it so, on purpose, and so does its mirror.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use super::common::{Globals, Hit, Ray, clamp01, flush, flush3, max0, max2};
+use super::prims::{prim_material, prim_normal, shading_at};
+use super::trace::{closest_hit, shade, shadow_origin};
+use crate::buffers::{Material, PRIM_NONE};
+use crate::kernel::real::{Real, V3};
+
+/// WGSL `WHITTED_STACK`: the most rays waiting at once (max_depth + 1 for the largest
+/// max_depth, 16).
+pub const WHITTED_STACK: usize = 17;
+
+/// The largest `max_depth` a scene may ask for (the stack holds max_depth + 1 rays).
+pub const MAX_DEPTH: u32 = WHITTED_STACK as u32 - 1;
+
+/// WGSL `Pending`: a secondary ray waiting on the stack.
+#[derive(Clone, Copy, Debug)]
+pub struct Pending<R> {
+    /// Origin.
+    pub origin: V3<R>,
+    /// The reflections and refractions that made it.
+    pub depth: u32,
+    /// Direction.
+    pub dir: V3<R>,
+    /// Premultiplied weight.
+    pub weight: V3<R>,
+}
+
+/// WGSL `fresnel_dielectric`: the unpolarised dielectric Fresnel reflectance at incidence
+/// cosine `cos_i` ≥ 0, relative index `eta` and squared transmitted sine `sin2_t`; 1 at and
+/// beyond the critical angle.
+pub fn fresnel_dielectric<R: Real>(cos_i: R, eta: R, sin2_t: R) -> R {
+    if sin2_t >= R::ONE {
+        return R::ONE;
+    }
+    let cos_t = max0(R::ONE - sin2_t).sqrt();
+    let r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    flush((flush(r_parl * r_parl) + flush(r_perp * r_perp)) / (R::ONE + R::ONE))
+}
+
+/// WGSL `worth_tracing`: the weight's largest channel is positive and reaches
+/// `min_weight`.
+pub fn worth_tracing<R: Real>(g: &Globals<R>, w: V3<R>) -> bool {
+    let m = max2(max2(w.x, w.y), w.z);
+    m > R::ZERO && m >= R::from_f32(g.buf.params.min_weight)
+}
+
+/// WGSL `keep_side`: `dir`, mirrored about the plane of unit normal `n` when it does not
+/// leave on the side `side` says (+1 the normal's, −1 the other).
+pub fn keep_side<R: Real>(dir: V3<R>, n: V3<R>, side: R) -> V3<R> {
+    let along = dir.dot(n);
+    if along * side > R::ZERO {
+        return dir;
+    }
+    dir - n * ((R::ONE + R::ONE) * along)
+}
+
+/// WGSL `push_children`: pushes the transmitted ray, then the reflected one, of the hit
+/// `hit` of `ray` (weight `weight`, made by `depth` bounces) onto `stack` above `sp`;
+/// returns the new top.
+pub fn push_children<R: Real>(
+    g: &Globals<R>,
+    stack: &mut [Pending<R>; WHITTED_STACK],
+    sp: usize,
+    ray: Ray<R>,
+    hit: &Hit<R>,
+    weight: V3<R>,
+    depth: u32,
+) -> usize {
+    let m: &Material = &g.buf.materials[prim_material(g, hit) as usize];
+    let (kr, kt) = (V3::<R>::from_f32(m.kr), V3::<R>::from_f32(m.kt));
+    let reflects = max2(max2(kr.x, kr.y), kr.z) > R::ZERO;
+    let transmits = max2(max2(kt.x, kt.y), kt.z) > R::ZERO;
+    if !reflects && !transmits {
+        return sp;
+    }
+    let p = ray.origin + ray.dir * hit.t;
+    let mut n = prim_normal(g, hit, p);
+    let entering = !(n.dot(ray.dir) > R::ZERO);
+    if !entering {
+        n = -n;
+    }
+    let sh = shading_at(g, hit, p, n);
+    let d = ray.dir.normalize();
+    let cos_i = max0(-d.dot(sh.n));
+    let ior = R::from_f32(m.ior);
+    let eta = if entering { ior } else { R::ONE / ior };
+    let sin2_t = max0(R::ONE - cos_i * cos_i) / (eta * eta);
+    let tir = transmits && sin2_t >= R::ONE;
+    let (mut wr, mut wt) = (kr, kt);
+    if m.fresnel != 0 {
+        let f = fresnel_dielectric(cos_i, eta, sin2_t);
+        wr = kr * f;
+        wt = kt * (R::ONE - f);
+    }
+    if tir {
+        wr = wr + wt;
+    }
+    let mut top = sp;
+    let w_t = flush3(weight * wt);
+    if transmits && !tir && worth_tracing(g, w_t) {
+        let cos_t = max0(R::ONE - sin2_t).sqrt();
+        let t = keep_side(d / V3::splat(eta) + sh.n * (cos_i / eta - cos_t), n, -R::ONE);
+        stack[top] = Pending {
+            origin: shadow_origin(p, -n),
+            depth: depth + 1,
+            dir: t,
+            weight: w_t,
+        };
+        top += 1;
+    }
+    let w_r = flush3(weight * wr);
+    if (reflects || tir) && worth_tracing(g, w_r) {
+        let r = keep_side(d + sh.n * ((R::ONE + R::ONE) * cos_i), n, R::ONE);
+        stack[top] = Pending {
+            origin: shadow_origin(sh.p, n),
+            depth: depth + 1,
+            dir: r,
+            weight: w_r,
+        };
+        top += 1;
+    }
+    top
+}
+
+/// WGSL `secondary`: the colour at the first hit `hit` of `ray` whose local shading is
+/// `local`, with every reflection and refraction below it, summed in the shader's order
+/// and clamped to [0, 1].
+pub fn secondary<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>, local: V3<R>) -> V3<R> {
+    let zero = Pending {
+        origin: V3::splat(R::ZERO),
+        depth: 0,
+        dir: V3::splat(R::ZERO),
+        weight: V3::splat(R::ZERO),
+    };
+    let mut stack = [zero; WHITTED_STACK];
+    let mut color = local;
+    let mut sp = 0;
+    if g.buf.params.max_depth > 0 {
+        sp = push_children(g, &mut stack, 0, ray, hit, V3::splat(R::ONE), 0);
+    }
+    let background = V3::<R>::from_f32(g.buf.params.background);
+    while sp != 0 {
+        sp -= 1;
+        let next = stack[sp];
+        let r = Ray {
+            origin: next.origin,
+            dir: next.dir,
+        };
+        let h = closest_hit(g, r, R::ZERO, R::INFINITY);
+        if h.prim == PRIM_NONE {
+            color = color + flush3(next.weight * background);
+            continue;
+        }
+        color = color + flush3(next.weight * shade(g, r, &h));
+        if next.depth < g.buf.params.max_depth {
+            sp = push_children(g, &mut stack, sp, r, &h, next.weight, next.depth);
+        }
+    }
+    V3::new(clamp01(color.x), clamp01(color.y), clamp01(color.z))
+}
