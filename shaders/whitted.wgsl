@@ -18,9 +18,12 @@
 // - Directions turn about the shading normal (smooth meshes); a direction that would leave
 //   on the wrong side of the geometric surface (a reflected ray under it, a transmitted
 //   ray over it, which interpolated normals allow) is mirrored about the geometric plane.
-// - Origins: the hit point pushed off the surface to the side the ray leaves by, as shadow
-//   rays are (`shadow_origin`: 64 ε of the point's largest coordinate); reflected rays
-//   from the shadow rays' own (lifted) point.
+// - Origins: the hit point pushed off the surface to the side the ray leaves by
+//   (`spawn_origin`), by 16 ε of the largest coordinate of the point and of the ray's
+//   origin: the hit point o + d·t is computed to a few ε of |o| + |p|, along the normal
+//   too, and 16 ε stays small beside the smallest sphere worth tracing at that scale (its
+//   radius a few tens of ulps). Reflected rays leave from the shadow rays' own (lifted)
+//   point.
 // - A ray whose weight's largest channel is 0 or below `params.min_weight` is not traced.
 // - Shadow rays are blocked by transmissive surfaces too, as in Whitted's model.
 
@@ -42,8 +45,12 @@ struct Pending {
 /// The unpolarised Fresnel reflectance of a dielectric boundary (pbrt-v4 `FrDielectric`)
 /// at an incidence of cosine `cos_i` ≥ 0, relative index `eta` (the far side's over the
 /// near side's), and `sin2_t`, the squared sine of the transmitted angle
-/// ((1 − cos_i²) / eta²); 1 at and beyond the critical angle (`sin2_t >= 1`).
+/// ((1 − cos_i²) / eta²); 1 at and beyond the critical angle (`sin2_t >= 1`); 0 where
+/// `eta` is 1 (no boundary: grazing rays included, which would otherwise meet 0/0).
 fn fresnel_dielectric(cos_i: f32, eta: f32, sin2_t: f32) -> f32 {
+    if eta == 1.0 {
+        return 0.0;
+    }
     if sin2_t >= 1.0 {
         return 1.0;
     }
@@ -51,6 +58,14 @@ fn fresnel_dielectric(cos_i: f32, eta: f32, sin2_t: f32) -> f32 {
     let r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     return flush((flush(r_parl * r_parl) + flush(r_perp * r_perp)) / 2.0);
+}
+
+/// The origin of a secondary ray leaving the hit `p` of a ray from `o`, on the side of the
+/// unit normal `n`: 16 ε of the largest coordinate of `o`, `p` (and 1) along `n`.
+fn spawn_origin(o: vec3<f32>, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let scale_p = max2(max2(abs(p.x), abs(p.y)), max2(abs(p.z), 1.0));
+    let scale = max2(scale_p, max2(max2(abs(o.x), abs(o.y)), abs(o.z)));
+    return p + n * (scale * SHADOW_EPSILON * 16.0);
 }
 
 /// Whether a ray of weight `w` is traced: its largest channel is positive and reaches
@@ -110,13 +125,13 @@ fn push_children(stack: ptr<function, array<Pending, WHITTED_STACK>>, sp: u32, r
     if transmits && !tir && worth_tracing(w_t) {
         let cos_t = sqrt(max0(1.0 - sin2_t));
         let t = keep_side(d / eta + sh.n * (cos_i / eta - cos_t), n, -1.0);
-        (*stack)[top] = Pending(shadow_origin(p, -n), depth + 1u, t, w_t);
+        (*stack)[top] = Pending(spawn_origin(ray.origin, p, -n), depth + 1u, t, w_t);
         top = top + 1u;
     }
     let w_r = flush3(weight * wr);
     if (reflects || tir) && worth_tracing(w_r) {
         let r = keep_side(d + sh.n * (2.0 * cos_i), n, 1.0);
-        (*stack)[top] = Pending(shadow_origin(sh.p, n), depth + 1u, r, w_r);
+        (*stack)[top] = Pending(spawn_origin(ray.origin, sh.p, n), depth + 1u, r, w_r);
         top = top + 1u;
     }
     return top;

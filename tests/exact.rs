@@ -43,6 +43,7 @@ fn specialisations() -> [Specialisation; 2] {
         use_bvh: true,
         smooth: true,
         antialias: true,
+        whitted: true,
     };
     let lean = Specialisation {
         has_triangles: false,
@@ -51,6 +52,7 @@ fn specialisations() -> [Specialisation; 2] {
         use_bvh: false,
         smooth: false,
         antialias: false,
+        whitted: false,
         ..all
     };
     [all, lean]

@@ -274,3 +274,36 @@ pub fn query_f32(buf: &SceneBuffers, spec: Specialisation, rays: &[RayIn]) -> Ve
     let g = globals_f32(buf, spec);
     rays.par_iter().map(|r| trace::query(&g, r)).collect()
 }
+
+/// The secondary rays that leave the first hit of the ray from `origin` along `dir`, as
+/// the f32 mirror's `push_children` makes them for a primary hit (the transmitted ray
+/// first): each one's origin and direction. Empty on a miss, where the material neither
+/// reflects nor transmits, or where `min_weight` cuts both. For tests of ray spawning.
+pub fn secondary_rays_f32(
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    origin: [f32; 3],
+    dir: [f32; 3],
+) -> Vec<([f32; 3], [f32; 3])> {
+    let g = globals_f32(buf, spec);
+    let ray = trace::Ray {
+        origin: V3::from_f32(origin),
+        dir: V3::from_f32(dir),
+    };
+    let hit = trace::closest_hit(&g, ray, 0.0, f32::INFINITY);
+    if hit.prim == crate::buffers::PRIM_NONE {
+        return Vec::new();
+    }
+    let zero = whitted::Pending {
+        origin: V3::splat(0.0),
+        depth: 0,
+        dir: V3::splat(0.0),
+        weight: V3::splat(0.0),
+    };
+    let mut stack = [zero; whitted::WHITTED_STACK];
+    let n = whitted::push_children(&g, &mut stack, 0, ray, &hit, V3::splat(1.0), 0);
+    stack[..n]
+        .iter()
+        .map(|p| (p.origin.to_f32(), p.dir.to_f32()))
+        .collect()
+}

@@ -7,7 +7,7 @@
 
 use super::common::{Globals, Hit, Ray, clamp01, flush, flush3, max0, max2};
 use super::prims::{prim_material, prim_normal, shading_at};
-use super::trace::{closest_hit, shade, shadow_origin};
+use super::trace::{closest_hit, shade};
 use crate::buffers::{Material, PRIM_NONE};
 use crate::kernel::real::{Real, V3};
 
@@ -33,8 +33,11 @@ pub struct Pending<R> {
 
 /// WGSL `fresnel_dielectric`: the unpolarised dielectric Fresnel reflectance at incidence
 /// cosine `cos_i` ≥ 0, relative index `eta` and squared transmitted sine `sin2_t`; 1 at and
-/// beyond the critical angle.
+/// beyond the critical angle; 0 where `eta` is 1 (no boundary, grazing included).
 pub fn fresnel_dielectric<R: Real>(cos_i: R, eta: R, sin2_t: R) -> R {
+    if eta == R::ONE {
+        return R::ZERO;
+    }
     if sin2_t >= R::ONE {
         return R::ONE;
     }
@@ -42,6 +45,14 @@ pub fn fresnel_dielectric<R: Real>(cos_i: R, eta: R, sin2_t: R) -> R {
     let r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     flush((flush(r_parl * r_parl) + flush(r_perp * r_perp)) / (R::ONE + R::ONE))
+}
+
+/// WGSL `spawn_origin`: the origin of a secondary ray leaving the hit `p` of a ray from
+/// `o`, on the side of `n`: 16 ε of the largest coordinate of `o`, `p` (and 1) along `n`.
+pub fn spawn_origin<R: Real>(o: V3<R>, p: V3<R>, n: V3<R>) -> V3<R> {
+    let scale_p = max2(max2(p.x.abs(), p.y.abs()), max2(p.z.abs(), R::ONE));
+    let scale = max2(scale_p, max2(max2(o.x.abs(), o.y.abs()), o.z.abs()));
+    p + n * (scale * R::EPSILON * R::from_u32(16))
 }
 
 /// WGSL `worth_tracing`: the weight's largest channel is positive and reaches
@@ -106,9 +117,13 @@ pub fn push_children<R: Real>(
     let w_t = flush3(weight * wt);
     if transmits && !tir && worth_tracing(g, w_t) {
         let cos_t = max0(R::ONE - sin2_t).sqrt();
-        let t = keep_side(d / V3::splat(eta) + sh.n * (cos_i / eta - cos_t), n, -R::ONE);
+        let t = keep_side(
+            d / V3::splat(eta) + sh.n * (cos_i / eta - cos_t),
+            n,
+            -R::ONE,
+        );
         stack[top] = Pending {
-            origin: shadow_origin(p, -n),
+            origin: spawn_origin(ray.origin, p, -n),
             depth: depth + 1,
             dir: t,
             weight: w_t,
@@ -119,7 +134,7 @@ pub fn push_children<R: Real>(
     if (reflects || tir) && worth_tracing(g, w_r) {
         let r = keep_side(d + sh.n * ((R::ONE + R::ONE) * cos_i), n, R::ONE);
         stack[top] = Pending {
-            origin: shadow_origin(sh.p, n),
+            origin: spawn_origin(ray.origin, sh.p, n),
             depth: depth + 1,
             dir: r,
             weight: w_r,
@@ -164,4 +179,40 @@ pub fn secondary<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>, local: V3<R
         }
     }
     V3::new(clamp01(color.x), clamp01(color.y), clamp01(color.z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fresnel_dielectric;
+
+    fn f(cos_i: f64, eta: f64) -> f64 {
+        let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
+        fresnel_dielectric(cos_i, eta, sin2_t)
+    }
+
+    /// Mitsuba's `test_fresnel` values: 0.04 at normal incidence on glass; total internal
+    /// reflection from inside at 45° gives exactly 1; η = 1 gives exactly 0 at every angle,
+    /// with no NaN. The twin: just inside the critical angle the reflectance is below 1.
+    #[test]
+    fn fresnel_values() {
+        assert!((f(1.0, 1.5) - 0.04).abs() < 1e-15, "{}", f(1.0, 1.5));
+        let f32_normal = fresnel_dielectric(1.0f32, 1.5, 0.0);
+        assert!((f32_normal - 0.04).abs() < 1e-7, "{f32_normal}");
+        let c45 = std::f64::consts::FRAC_1_SQRT_2;
+        assert_eq!(f(c45, 1.0 / 1.5), 1.0);
+        for k in 0..=100 {
+            let c = k as f64 / 100.0;
+            assert_eq!(f(c, 1.0), 0.0, "cos {c}");
+            assert_eq!(
+                fresnel_dielectric(c as f32, 1.0, (1.0 - (c * c) as f32).max(0.0)),
+                0.0
+            );
+        }
+        // The critical angle from inside glass: sin θc = 1/1.5.
+        let critical = (1.0f64 - 1.0 / 2.25).sqrt();
+        assert!(f(critical + 1e-6, 1.0 / 1.5) < 1.0);
+        assert_eq!(f(critical - 1e-6, 1.0 / 1.5), 1.0);
+        // Grazing from outside: everything is reflected, and no NaN.
+        assert!((f(0.0, 1.5) - 1.0).abs() < 1e-12);
+    }
 }

@@ -871,8 +871,12 @@ impl Validator<'_> {
     fn optics(&self, name: &str, m: &format::MaterialFile) -> Result<Optics, SceneError> {
         let key = |k: &str| format!("materials.{name}.{k}");
         let d = Optics::default();
-        let kr = m.kr.as_ref().map_or(Ok(d.kr), |v| self.colour(v, &key("kr")))?;
-        let kt = m.kt.as_ref().map_or(Ok(d.kt), |v| self.colour(v, &key("kt")))?;
+        let kr =
+            m.kr.as_ref()
+                .map_or(Ok(d.kr), |v| self.colour(v, &key("kr")))?;
+        let kt =
+            m.kt.as_ref()
+                .map_or(Ok(d.kt), |v| self.colour(v, &key("kt")))?;
         let ior = match (&m.ior, &m.kt) {
             (Some(i), _) => {
                 let x = *i.get_ref();
@@ -905,7 +909,11 @@ impl Validator<'_> {
             Some(v) => {
                 let x = *v.get_ref();
                 if !(0..=MAX_DEPTH as i64).contains(&x) {
-                    return self.err(v.span(), "max_depth", format!("{x} is not in 0..={MAX_DEPTH}"));
+                    return self.err(
+                        v.span(),
+                        "max_depth",
+                        format!("{x} is not in 0..={MAX_DEPTH}"),
+                    );
                 }
                 Ok(x as u32)
             }
@@ -919,7 +927,11 @@ impl Validator<'_> {
             Some(v) => {
                 let x = *v.get_ref();
                 if !(x.is_finite() && x >= 0.0) {
-                    return self.err(v.span(), "min_weight", format!("{x} must be finite and ≥ 0"));
+                    return self.err(
+                        v.span(),
+                        "min_weight",
+                        format!("{x} must be finite and ≥ 0"),
+                    );
                 }
                 Ok(x)
             }
