@@ -2,8 +2,8 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -229,10 +229,11 @@ fn max_input_bytes() -> u64 {
         )
 }
 
-fn load(scene: &Path, confine: bool) -> Result<Scene> {
+fn load(scene: &Path, confine: bool, cache: Option<Arc<glint::cache::Cache>>) -> Result<Scene> {
     let options = glint::scene::LoadOptions {
         max_input_bytes: max_input_bytes(),
         confine,
+        cache,
     };
     let s = Scene::load_with(scene, &options)?;
     for w in &s.warnings {
@@ -466,7 +467,31 @@ fn cache_settings(dir: std::path::PathBuf) -> glint::cache::Settings {
     if let Some(n) = var("GLINT_CACHE_MIN_PRIMS") {
         s.min_prims = n as usize;
     }
+    // `FinishWrites` waits for the writes before the render ends.
+    s.write_behind = true;
     s
+}
+
+/// What the cache did: warnings always, the rest as `cache: ...` when `verbose`.
+fn print_cache_events(cache: Option<&glint::cache::Cache>, verbose: bool) {
+    for e in cache.map(|c| c.take_events()).unwrap_or_default() {
+        if e.is_warning() {
+            eprintln!("{e}");
+        } else if verbose {
+            eprintln!("cache: {e}");
+        }
+    }
+}
+
+/// Waits, when dropped, for the cache's entries still being written behind.
+struct FinishWrites(Option<Arc<glint::cache::Cache>>);
+
+impl Drop for FinishWrites {
+    fn drop(&mut self) {
+        if let Some(c) = &self.0 {
+            let _ = c.finish_writes();
+        }
+    }
 }
 
 fn main() {
@@ -489,9 +514,6 @@ fn main() {
         std::process::exit(130);
     });
     let result = run(Cli::parse());
-    // Cache entries still being written (`cache::write_behind`) are finished, whatever
-    // happened, so that the next render finds them.
-    let _ = glint::cache::finish_writes();
     if let Err(e) = result {
         eprintln!("error: {e:#}");
         std::process::exit(1);
@@ -514,11 +536,12 @@ fn run(cli: Cli) -> Result<()> {
                 },
             common: CommonArgs { adapter, confine },
         } => {
-            if let Some(dir) = glint::cache::default_dir().filter(|_| !no_cache) {
-                glint::cache::enable(cache_settings(dir));
-                // `main` waits for the writes before the process ends.
-                glint::cache::write_behind(true);
-            }
+            let cache = glint::cache::default_dir()
+                .filter(|_| !no_cache)
+                .map(|dir| Arc::new(glint::cache::Cache::new(cache_settings(dir))));
+            // Entries still being written behind are finished, whatever happens, so that
+            // the next render finds them.
+            let _finish = FinishWrites(cache.clone());
             if same_file(&scene, &output) {
                 bail!(
                     "{}: the output would overwrite the scene file",
@@ -528,7 +551,7 @@ fn run(cli: Cli) -> Result<()> {
             let start = Instant::now();
             // Before any work: the folder exists and a file can be made there.
             glint::image::check_writable(&output)?;
-            let mut s = load(&scene, confine)?;
+            let mut s = load(&scene, confine, cache.clone())?;
             s.camera.samples = samples.unwrap_or(s.camera.samples);
             let (w, h) = size.unwrap_or(s.size());
             let algo = triangle.unwrap_or(s.triangle);
@@ -554,13 +577,7 @@ fn run(cli: Cli) -> Result<()> {
             } else {
                 SceneBuffers::from_scene_taking(&mut s, w, h, algo)
             };
-            for e in glint::cache::take_events() {
-                if e.starts_with("warning") {
-                    eprintln!("{e}");
-                } else if verbose {
-                    eprintln!("cache: {e}");
-                }
-            }
+            print_cache_events(cache.as_deref(), verbose);
             let spec = Specialisation::for_scene(&buf);
             let renderer =
                 glint::Renderer::with_options(backend.into(), &gpu_options(adapter.as_deref()))?;
@@ -672,16 +689,10 @@ fn run(cli: Cli) -> Result<()> {
             bar.finish();
             glint::stages::time("write", || sink.finish(&output))?;
             let t_wait = Instant::now();
-            if glint::cache::finish_writes() > 0 {
+            if cache.as_ref().is_some_and(|c| c.finish_writes() > 0) {
                 glint::stages::record("cache wait", t_wait.elapsed());
             }
-            for e in glint::cache::take_events() {
-                if e.starts_with("warning") {
-                    eprintln!("{e}");
-                } else if verbose {
-                    eprintln!("cache: {e}");
-                }
-            }
+            print_cache_events(cache.as_deref(), verbose);
             println!(
                 "{}: {}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",
                 output.display(),
@@ -799,7 +810,7 @@ fn run(cli: Cli) -> Result<()> {
             diff,
         } => {
             glint::image::check_extension(&diff)?;
-            let mut s = load(&scene, confine)?;
+            let mut s = load(&scene, confine, None)?;
             s.camera.samples = samples.unwrap_or(s.camera.samples);
             let (w, h) = size.unwrap_or(s.size());
             let algo = triangle.unwrap_or(s.triangle);
@@ -910,7 +921,7 @@ fn bench(
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let mut s = load(p, confine)?;
+        let mut s = load(p, confine, None)?;
         s.camera.samples = samples.unwrap_or(s.camera.samples);
         list.push((name, s));
     }

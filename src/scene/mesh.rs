@@ -167,7 +167,8 @@ pub(super) fn load(
     let xf = mesh_transform(v, i, m)?;
     // A large mesh placed by glint's own reader may be in the cache (see `crate::cache`):
     // its key is the file's bytes, the transform and how normals are read.
-    let cache_key = (m.material.is_some() && crate::cache::enabled()).then(|| {
+    let cache = v.cache.filter(|_| m.material.is_some());
+    let cache_key = cache.map(|cache| {
         let xf_bits: Vec<u8> = [xf.scale.to_array(), xf.translate.to_array()]
             .into_iter()
             .flatten()
@@ -178,10 +179,12 @@ pub(super) fn load(
             (normals == Normals::Read) as u8,
             obj_path.extension().is_some_and(|e| e == "gz") as u8,
         ];
-        crate::cache::Key::new("mesh", &[&raw, &xf_bits, &settings, &v.limit.to_le_bytes()])
+        let key =
+            crate::cache::Key::new("mesh", &[&raw, &xf_bits, &settings, &v.limit.to_le_bytes()]);
+        (cache, key)
     });
-    if let (Some(name), Some(ckey)) = (&m.material, &cache_key)
-        && let Some(entry) = crate::stages::time("cache read", || CachedMesh::load(ckey))
+    if let (Some(name), Some((cache, ckey))) = (&m.material, &cache_key)
+        && let Some(entry) = crate::stages::time("cache read", || CachedMesh::load(cache, ckey))
     {
         drop(raw);
         let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
@@ -301,9 +304,15 @@ pub(super) fn load(
             } else {
                 None
             };
-            if let Some(ckey) = cache_key.filter(|_| crate::cache::worth(placed.len())) {
+            if let Some((cache, ckey)) = cache_key.filter(|(c, _)| c.worth(placed.len())) {
                 crate::stages::time("cache write", || {
-                    CachedMesh::store(&ckey, &placed, corner.as_deref(), &parsed.short_faces)
+                    CachedMesh::store(
+                        cache,
+                        &ckey,
+                        &placed,
+                        corner.as_deref(),
+                        &parsed.short_faces,
+                    )
                 });
             }
             if let Some(normals) = corner {
@@ -590,8 +599,8 @@ struct CachedMesh {
 }
 
 impl CachedMesh {
-    fn load(key: &crate::cache::Key) -> Option<CachedMesh> {
-        let mut s = crate::cache::load("mesh", key)?.into_iter();
+    fn load(cache: &crate::cache::Cache, key: &crate::cache::Key) -> Option<CachedMesh> {
+        let mut s = cache.load("mesh", key)?.into_iter();
         let (vertices, normals, short) = (s.next()?, s.next()?, s.next()?);
         let (short_faces, first) = (*short.first()? as usize, *short.get(1)? as usize);
         Some(CachedMesh {
@@ -603,6 +612,7 @@ impl CachedMesh {
     }
 
     fn store(
+        cache: &std::sync::Arc<crate::cache::Cache>,
         key: &crate::cache::Key,
         placed: &[Triangle],
         normals: Option<&[[[f32; 3]; 3]]>,
@@ -622,7 +632,7 @@ impl CachedMesh {
         // The text's vertices are already a copy of their own: written on a thread of
         // their own where the program lets the cache write behind (`glint render` does),
         // while the scene is flattened and its BVH built.
-        crate::cache::store_owned("mesh", *key, vec![vertices, normals, short.to_vec()]);
+        cache.store_owned("mesh", *key, vec![vertices, normals, short.to_vec()]);
     }
 }
 

@@ -9,6 +9,7 @@ pub mod range;
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
+use std::sync::Arc;
 
 pub use error::{SceneError, line_of};
 use format::{SceneFile, Vec3File};
@@ -197,11 +198,16 @@ pub struct Scene {
     /// Where the triangles came from, in order: (index of the first, `file:line: key`),
     /// one entry per `[[triangles]]` and per mesh.
     pub triangle_sources: Vec<(usize, String)>,
+    /// The cache the scene was loaded with ([`LoadOptions::cache`]), for the BVH build
+    /// ([`crate::buffers::SceneBuffers::new`]) to use too; `None` caches nothing. Scenes
+    /// compare equal only when they hold the same cache, or none (a cache equals only
+    /// itself: see [`crate::cache::Cache`]).
+    pub cache: Option<Arc<crate::cache::Cache>>,
 }
 
 /// How a scene is read: settings as values (the command line makes them from its flags and
 /// environment).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LoadOptions {
     /// The most bytes read from one input file, and unpacked from one `.gz`
     /// ([`DEFAULT_MAX_INPUT_MIB`] MiB by default; `GLINT_MAX_INPUT_MIB` on the command
@@ -210,6 +216,10 @@ pub struct LoadOptions {
     /// Read only files below the scene's own folder (after following symbolic links); a
     /// mesh or MTL anywhere else is an error naming it.
     pub confine: bool,
+    /// Where large meshes as placed, and large scenes' BVHs, are cached (see
+    /// [`crate::cache`]); `None` (the default) caches nothing. The scene keeps it for its
+    /// BVH ([`Scene::cache`]).
+    pub cache: Option<Arc<crate::cache::Cache>>,
 }
 
 impl Default for LoadOptions {
@@ -217,6 +227,7 @@ impl Default for LoadOptions {
         LoadOptions {
             max_input_bytes: DEFAULT_MAX_INPUT_MIB << 20,
             confine: false,
+            cache: None,
         }
     }
 }
@@ -246,7 +257,7 @@ impl Scene {
         let text = read_scene_text(path, limit)?;
         if !options.confine {
             let read = move |p: &Path| read_from_disk_limited(p, limit);
-            return Scene::parse_limited(&text, path, &read, limit);
+            return Scene::parse_limited(&text, path, &read, options);
         }
         let root = path
             .parent()
@@ -257,7 +268,7 @@ impl Scene {
             error,
         })?;
         let read = confined_reader_limited(root, limit);
-        Scene::parse_limited(&text, path, &read, limit)
+        Scene::parse_limited(&text, path, &read, options)
     }
 
     /// Parses and validates scene text; `path` names it in errors and anchors mesh paths.
@@ -268,22 +279,24 @@ impl Scene {
     /// [`Scene::parse`], reading meshes and MTLs through `read` (a fuzzer or an embedder
     /// can serve them from memory).
     pub fn parse_with(src: &str, path: &Path, read: &ReadFile<'_>) -> Result<Scene, SceneError> {
-        Scene::parse_limited(src, path, read, LoadOptions::default().max_input_bytes)
+        Scene::parse_limited(src, path, read, &LoadOptions::default())
     }
 
-    /// [`Scene::parse_with`] with `limit` bytes unpacked at most from one `.gz` mesh.
+    /// [`Scene::parse_with`] with [`LoadOptions::max_input_bytes`] unpacked at most from one
+    /// `.gz` mesh, and [`LoadOptions::cache`]; `options.confine` is `read`'s to apply.
     fn parse_limited(
         src: &str,
         path: &Path,
         read: &ReadFile<'_>,
-        limit: u64,
+        options: &LoadOptions,
     ) -> Result<Scene, SceneError> {
         let file: SceneFile = toml::from_str(src).map_err(|e| syntax_error(src, path, &e))?;
         Validator {
             src,
             path,
             read,
-            limit,
+            limit: options.max_input_bytes,
+            cache: options.cache.as_ref(),
         }
         .scene(file)
     }
@@ -364,6 +377,8 @@ struct Validator<'a> {
     read: &'a ReadFile<'a>,
     /// The most bytes unpacked from one `.gz` mesh ([`LoadOptions::max_input_bytes`]).
     limit: u64,
+    /// [`LoadOptions::cache`].
+    cache: Option<&'a Arc<crate::cache::Cache>>,
 }
 
 /// How a scene reads the files it names (meshes and their MTLs): the bytes, or a message.
@@ -674,6 +689,7 @@ impl Validator<'_> {
             warnings,
             sphere_sources,
             triangle_sources,
+            cache: self.cache.cloned(),
         })
     }
 
