@@ -2,12 +2,145 @@
 //! scene or from the OBJ's MTL, then scale, rotate (x, then y, then z) and translate.
 
 use std::io::BufReader;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use super::format::MeshFile;
-use super::obj::{NO_NORMAL, Normals, Parsed};
-use super::{Material, Model, SceneError, SmoothNormals, Triangle, Validator, line_of};
+use super::obj::{NO_NORMAL, Normals, ObjError, Parsed};
+use super::{Material, Model, ReadError, SceneError, SmoothNormals, Triangle, Validator, line_of};
+
+/// What is wrong with a mesh file (an OBJ, or the MTL it names), in its own terms: where
+/// the scene names it, [`SceneError::Mesh`] says (scene file, line, key, mesh file).
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// The OBJ could not be read.
+    #[error("{0}")]
+    Read(ReadError),
+    /// The `.gz` does not inflate.
+    #[error("cannot gunzip: {0}")]
+    Gunzip(std::io::Error),
+    /// The `.gz` inflates to more than the input limit.
+    #[error(
+        "unpacks to more than the input limit of {} MiB (set GLINT_MAX_INPUT_MIB to raise it)",
+        .limit >> 20
+    )]
+    Unpacked {
+        /// The limit, bytes ([`super::LoadOptions::max_input_bytes`]).
+        limit: u64,
+    },
+    /// The OBJ is not UTF-8.
+    #[error("not UTF-8 at line {line}")]
+    NotUtf8 {
+        /// The line (from 1) of its first byte that is not.
+        line: usize,
+    },
+    /// The OBJ's text is wrong at one of its lines.
+    #[error("{0}")]
+    Obj(ObjError),
+    /// A triangle of glint's reader (numbered from 0 in file order) cannot be placed.
+    #[error("face {face}: {why}")]
+    Face {
+        /// The triangle.
+        face: usize,
+        /// What is wrong with it.
+        why: FaceError,
+    },
+    /// An MTL the OBJ names could not be read.
+    #[error("MTL {path}: {error}")]
+    MtlRead {
+        /// The MTL, as found next to the OBJ.
+        path: PathBuf,
+        /// Why.
+        error: ReadError,
+    },
+    /// An MTL the OBJ names is wrong at one of its lines.
+    #[error("{file}: {error}")]
+    Mtl {
+        /// The MTL, as the OBJ names it.
+        file: PathBuf,
+        /// What is wrong, at its line.
+        error: ObjError,
+    },
+    /// tobj refused the OBJ.
+    #[error("cannot parse OBJ: {0}")]
+    Tobj(tobj::LoadError),
+    /// tobj refused the OBJ's MTL.
+    #[error("cannot load its MTL: {0}")]
+    TobjMtl(tobj::LoadError),
+    /// An MTL material with a negative or non-finite value.
+    #[error("MTL material {name:?} has a negative or non-finite value")]
+    MtlValue {
+        /// Its name in the MTL.
+        name: String,
+    },
+    /// An MTL material with a colour component above [`super::MAX_COLOUR`].
+    #[error(
+        "MTL material {name:?} has a colour component above {:e}",
+        super::MAX_COLOUR
+    )]
+    MtlColour {
+        /// Its name in the MTL.
+        name: String,
+    },
+    /// An object of the OBJ has no material: neither the scene nor an MTL gives one.
+    #[error("object {object:?} has no material: name one with `material =` or give the OBJ an MTL")]
+    NoMaterial {
+        /// The object's name.
+        object: String,
+    },
+    /// A face of a tobj object names a position the object does not have.
+    #[error(
+        "object {object:?}, face {face}: vertex index {index} is out of range (the object has {vertices} vertices)"
+    )]
+    ObjectIndex {
+        /// The object's name.
+        object: String,
+        /// The triangle, from 0 within the object.
+        face: usize,
+        /// The index, from 1.
+        index: usize,
+        /// The object's positions.
+        vertices: usize,
+    },
+    /// A triangle of a tobj object cannot be placed.
+    #[error("object {object:?}, face {face}: {why}")]
+    ObjectFace {
+        /// The object's name.
+        object: String,
+        /// The triangle, from 0 within the object.
+        face: usize,
+        /// What is wrong with it.
+        why: FaceError,
+    },
+    /// A smooth mesh whose triangles glint's reader and tobj count differently, so its
+    /// normals cannot be paired with its faces.
+    #[error(
+        "smooth: the OBJ reader found {ours} triangles where tobj found {tobj}; cannot pair normals with faces"
+    )]
+    Unpaired {
+        /// glint's count.
+        ours: usize,
+        /// tobj's count.
+        tobj: usize,
+    },
+    /// No triangles.
+    #[error("no triangles: the mesh is empty")]
+    Empty,
+}
+
+/// What is wrong with one triangle as the entry's transform places it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum FaceError {
+    /// A corner of the file's is not finite.
+    #[error("a vertex is not finite")]
+    NotFinite,
+    /// A corner is finite in the file but not once transformed.
+    #[error("the transform overflows f32")]
+    Overflow,
+    /// A corner's normal has no direction once transformed.
+    #[error("its normal does not survive the transform (a zero scale component?)")]
+    NormalLost,
+}
 
 /// Whether a triangle has zero area in f64 (collinear or coincident vertices).
 pub fn is_degenerate(v: &[[f32; 3]; 3]) -> bool {
@@ -97,7 +230,7 @@ fn area_weighted(vertices: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<glam::DVe
 /// triangle's own normal where that is zero), each rounded to f32 as a file would hold
 /// it, then carried by the transform. A mesh without `vn` thus gets exactly the normals of
 /// the same mesh with its computed normals written out as `vn`.
-fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>, String> {
+fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>, MeshError> {
     use rayon::prelude::*;
     let needs_computed = parsed.normal_ix.iter().flatten().any(|&k| k == NO_NORMAL);
     let acc = if needs_computed {
@@ -128,8 +261,9 @@ fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>,
                         .or_else(|| unit_f32((p1 - p0).cross(p2 - p0)))
                         .unwrap_or([0.0, 0.0, 1.0]) // zero area: never hit
                 };
-                out[c] = xf.apply_normal(object).ok_or_else(|| {
-                    format!("face {f}: its normal does not survive the transform (a zero scale component?)")
+                out[c] = xf.apply_normal(object).ok_or(MeshError::Face {
+                    face: f,
+                    why: FaceError::NormalLost,
                 })?;
             }
             Ok(out)
@@ -156,14 +290,15 @@ pub(super) fn load(
     let line = line_of(v.src, m.file.span().start);
     let base = v.path.parent().unwrap_or(Path::new("."));
     let obj_path = base.join(m.file.get_ref());
-    let fail = |message: String| SceneError::Mesh {
+    let fail = |error: MeshError| SceneError::Mesh {
         file: v.path.to_owned(),
         line,
         key: key.clone(),
         mesh: obj_path.clone(),
-        message,
+        error: Box::new(error),
     };
-    let raw = crate::stages::time("read", || (v.read)(&obj_path)).map_err(&fail)?;
+    let raw = crate::stages::time("read", || (v.read)(&obj_path))
+        .map_err(|e| fail(MeshError::Read(e)))?;
     let xf = mesh_transform(v, i, m)?;
     // A large mesh placed by glint's own reader may be in the cache (see `crate::cache`):
     // its key is the file's bytes, the transform and how normals are read.
@@ -232,10 +367,9 @@ pub(super) fn load(
         Ok(t) => t,
         Err(e) => {
             let text = String::from_utf8_lossy(&bytes);
-            return Err(fail(format!(
-                "not UTF-8 at line {}",
-                line_of(&text, e.valid_up_to())
-            )));
+            return Err(fail(MeshError::NotUtf8 {
+                line: line_of(&text, e.valid_up_to()),
+            }));
         }
     };
     // glint's own parallel reader when the scene names the material and the OBJ holds only
@@ -245,7 +379,7 @@ pub(super) fn load(
             Some(parsed) => parsed,
             None => crate::stages::time("OBJ parse", || super::obj::parse(text, normals)),
         }
-        .map_err(&fail)?;
+        .map_err(|e| fail(MeshError::Obj(e)))?;
         if let Some(parsed) = parsed {
             drop(bytes); // the text is parsed: free it before the triangles are placed
             let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
@@ -289,8 +423,8 @@ pub(super) fn load(
                     let ix = parsed.triangles[f];
                     let ps = ix.map(|k| parsed.vertices[k as usize]);
                     // A corner is not finite, so `check_placed` says which way.
-                    if let Err(e) = check_placed(ps, ix.map(|k| moved[k as usize])) {
-                        return Err(fail(format!("face {f}: {e}")));
+                    if let Err(why) = check_placed(ps, ix.map(|k| moved[k as usize])) {
+                        return Err(fail(MeshError::Face { face: f, why }));
                     }
                 }
                 placed
@@ -330,7 +464,7 @@ pub(super) fn load(
             return finish(v, line, &key, &triangles[before..], &fail, warnings);
         }
     }
-    let checked = super::obj::check(text, normals).map_err(&fail)?;
+    let checked = super::obj::check(text, normals).map_err(|e| fail(MeshError::Obj(e)))?;
     let short_faces = &checked.short_faces;
     crate::stages::record("OBJ check", t_check.elapsed());
     if let Some(first) = short_faces.first() {
@@ -348,29 +482,28 @@ pub(super) fn load(
         ignore_lines: true,
     };
     let obj_dir = obj_path.parent().unwrap_or(Path::new(".")).to_owned();
-    let mtl_problem = std::cell::RefCell::new(None::<String>);
+    let mtl_problem = std::cell::RefCell::new(None::<MeshError>);
     let t_parse = std::time::Instant::now();
     let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(&bytes[..]), &opts, |p| {
-        let mtl = (v.read)(&obj_dir.join(p)).map_err(|e| {
-            *mtl_problem.borrow_mut() = Some(format!("MTL {}: {e}", obj_dir.join(p).display()));
+        let mtl = (v.read)(&obj_dir.join(p)).map_err(|error| {
+            *mtl_problem.borrow_mut() = Some(MeshError::MtlRead {
+                path: obj_dir.join(p),
+                error,
+            });
             tobj::LoadError::OpenFileFailed
         })?;
-        if let Some((line, why)) = mtl_junk(&mtl) {
-            *mtl_problem.borrow_mut() = Some(format!("{}: line {line}: {why}", p.display()));
-            return Err(tobj::LoadError::MaterialParseError);
-        }
-        if let Some(line) = short_colour_line(&mtl) {
-            *mtl_problem.borrow_mut() = Some(format!(
-                "{}: line {line}: a colour (Ka, Kd, Ks, Ke) needs three numbers",
-                p.display()
-            ));
+        if let Some(error) = mtl_junk(&mtl).or_else(|| short_colour(&mtl)) {
+            *mtl_problem.borrow_mut() = Some(MeshError::Mtl {
+                file: p.to_owned(),
+                error,
+            });
             return Err(tobj::LoadError::MaterialParseError);
         }
         tobj::load_mtl_buf(&mut BufReader::new(&mtl[..]))
     })
     .map_err(|e| match mtl_problem.borrow_mut().take() {
         Some(m) => fail(m),
-        None => fail(format!("cannot parse OBJ: {e}")),
+        None => fail(MeshError::Tobj(e)),
     })?;
 
     let named = match &m.material {
@@ -390,7 +523,7 @@ pub(super) fn load(
                 mtl_problem
                     .borrow_mut()
                     .take()
-                    .unwrap_or_else(|| format!("cannot load its MTL: {e}")),
+                    .unwrap_or(MeshError::TobjMtl(e)),
             ));
         }
     };
@@ -405,21 +538,18 @@ pub(super) fn load(
             .chain([&n])
             .any(|x| !x.is_finite() || *x < 0.0)
         {
-            return Err(fail(format!(
-                "MTL material {:?} has a negative or non-finite value",
-                mm.name
-            )));
+            return Err(fail(MeshError::MtlValue {
+                name: mm.name.clone(),
+            }));
         }
         if [ka, kd, ks]
             .iter()
             .flatten()
             .any(|&x| x > super::MAX_COLOUR)
         {
-            return Err(fail(format!(
-                "MTL material {:?} has a colour component above {:e}",
-                mm.name,
-                super::MAX_COLOUR
-            )));
+            return Err(fail(MeshError::MtlColour {
+                name: mm.name.clone(),
+            }));
         }
         materials.push(Material {
             name: format!("{}#{k}:{}", m.file.get_ref(), mm.name),
@@ -444,10 +574,9 @@ pub(super) fn load(
             (Some(k), _) => k,
             (None, Some(id)) if id < mtl.len() => mtl_base + id as u32,
             _ => {
-                return Err(fail(format!(
-                    "object {:?} has no material: name one with `material =` or give the OBJ an MTL",
-                    model.name
-                )));
+                return Err(fail(MeshError::NoMaterial {
+                    object: model.name.clone(),
+                }));
             }
         };
         let n_vertices = mesh.positions.len() / 3;
@@ -456,11 +585,12 @@ pub(super) fn load(
             for (slot, &ix) in ps.iter_mut().zip(tri) {
                 let ix = ix as usize;
                 if ix >= n_vertices {
-                    return Err(fail(format!(
-                        "object {:?}, face {f}: vertex index {} is out of range (the object has {n_vertices} vertices)",
-                        model.name,
-                        ix + 1
-                    )));
+                    return Err(fail(MeshError::ObjectIndex {
+                        object: model.name.clone(),
+                        face: f,
+                        index: ix + 1,
+                        vertices: n_vertices,
+                    }));
                 }
                 *slot = [
                     mesh.positions[3 * ix],
@@ -468,8 +598,13 @@ pub(super) fn load(
                     mesh.positions[3 * ix + 2],
                 ];
             }
-            let vertices = place(&xf, ps)
-                .map_err(|e| fail(format!("object {:?}, face {f}: {e}", model.name)))?;
+            let vertices = place(&xf, ps).map_err(|why| {
+                fail(MeshError::ObjectFace {
+                    object: model.name.clone(),
+                    face: f,
+                    why,
+                })
+            })?;
             triangles.push(Triangle { vertices, material });
         }
     }
@@ -478,11 +613,10 @@ pub(super) fn load(
         // glint's reader gives tobj's triangles in tobj's order (tested in `obj`), so the
         // corner normals line up with the triangles just placed.
         if checked.triangles.len() != triangles.len() - before {
-            return Err(fail(format!(
-                "smooth: the OBJ reader found {} triangles where tobj found {}; cannot pair normals with faces",
-                checked.triangles.len(),
-                triangles.len() - before
-            )));
+            return Err(fail(MeshError::Unpaired {
+                ours: checked.triangles.len(),
+                tobj: triangles.len() - before,
+            }));
         }
         let t = std::time::Instant::now();
         smooth.push(SmoothNormals {
@@ -516,17 +650,17 @@ fn mesh_transform(v: &Validator<'_>, i: usize, m: &MeshFile) -> Result<Transform
 }
 
 /// One triangle's file positions, checked finite, transformed, checked again.
-fn place(xf: &Transform, ps: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], String> {
+fn place(xf: &Transform, ps: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], FaceError> {
     check_placed(ps, ps.map(|p| xf.apply(p)))
 }
 
 /// `vs`, the transformed `ps`, when both are finite.
-fn check_placed(ps: [[f32; 3]; 3], vs: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], String> {
+fn check_placed(ps: [[f32; 3]; 3], vs: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], FaceError> {
     if ps.iter().flatten().any(|x| !x.is_finite()) {
-        return Err("a vertex is not finite".into());
+        return Err(FaceError::NotFinite);
     }
     if vs.iter().flatten().any(|x| !x.is_finite()) {
-        return Err("the transform overflows f32".into());
+        return Err(FaceError::Overflow);
     }
     Ok(vs)
 }
@@ -537,11 +671,11 @@ fn finish(
     line: usize,
     key: &str,
     added: &[Triangle],
-    fail: &dyn Fn(String) -> SceneError,
+    fail: &dyn Fn(MeshError) -> SceneError,
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
     if added.is_empty() {
-        return Err(fail("no triangles: the mesh is empty".into()));
+        return Err(fail(MeshError::Empty));
     }
     let degenerate = {
         use rayon::prelude::*;
@@ -567,26 +701,26 @@ fn short_face_warning(n: usize, first: usize) -> String {
     )
 }
 
-/// Why an MTL's bytes are not an MTL text, as (line, message): not UTF-8, a NUL byte, or a
-/// line longer than `obj::MAX_LINE_BYTES`.
-fn mtl_junk(mtl: &[u8]) -> Option<(u32, String)> {
+/// Why an MTL's bytes are not an MTL text, at its line: not UTF-8, a NUL byte, or a line
+/// longer than `obj::MAX_LINE_BYTES`.
+fn mtl_junk(mtl: &[u8]) -> Option<ObjError> {
     if let Err(e) = std::str::from_utf8(mtl) {
         let line = super::error::line_of_bytes(mtl, e.valid_up_to()) as u32;
-        return Some((line, "not UTF-8".to_string()));
+        return Some(ObjError::NotUtf8 { line });
     }
     super::obj::junk(mtl, true)
 }
 
-/// The first line (1-based) of an MTL whose Ka, Kd, Ks or Ke has fewer than three
-/// values: tobj 4 panics on those, so they are refused before it sees them.
-fn short_colour_line(mtl: &[u8]) -> Option<usize> {
+/// The first line of an MTL whose Ka, Kd, Ks or Ke has fewer than three values: tobj 4
+/// panics on those, so they are refused before it sees them.
+fn short_colour(mtl: &[u8]) -> Option<ObjError> {
     let text = String::from_utf8_lossy(mtl);
     text.lines()
         .position(|l| {
             let mut words = l.split_whitespace();
             matches!(words.next(), Some("Ka" | "Kd" | "Ks" | "Ke")) && words.count() < 3
         })
-        .map(|k| k + 1)
+        .map(|k| ObjError::ShortColour { line: k as u32 + 1 })
 }
 
 /// What the cache holds for a mesh read by glint's own reader: its triangles as placed,
@@ -638,7 +772,7 @@ impl CachedMesh {
 
 /// The bytes of an OBJ file as read (`raw`), gunzipped (at most `limit` bytes) when the
 /// name ends in `.gz`.
-fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, String> {
+fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> {
     let _gunzip = Gunzip(std::time::Instant::now());
     if path.extension().is_some_and(|e| e == "gz") {
         use std::io::Read;
@@ -651,9 +785,7 @@ fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, String> {
         loop {
             let old = out.len();
             out.resize(old + GUNZIP_BLOCK, 0);
-            let n = dec
-                .read(&mut out[old..])
-                .map_err(|e| format!("cannot gunzip: {e}"))?;
+            let n = dec.read(&mut out[old..]).map_err(MeshError::Gunzip)?;
             out.truncate(old + n);
             if n == 0 {
                 break;
@@ -665,19 +797,15 @@ fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, String> {
                 None => out.len() - line_start > super::obj::MAX_LINE_BYTES,
             };
             if long || new.contains(&0) {
-                let (line, why) =
-                    super::obj::junk(&out, false).unwrap_or((1, "not an OBJ text".into()));
-                return Err(format!("line {line}: {why}"));
+                let why = super::obj::junk(&out, false).unwrap_or(ObjError::NotText { line: 1 });
+                return Err(MeshError::Obj(why));
             }
             if first_nl.is_some() {
                 line_start = old + 1 + new.iter().rposition(|&b| b == b'\n').unwrap_or(0);
             }
         }
         if out.len() as u64 > limit {
-            return Err(format!(
-                "unpacks to more than the input limit of {} MiB (set GLINT_MAX_INPUT_MIB to raise it)",
-                limit >> 20
-            ));
+            return Err(MeshError::Unpacked { limit });
         }
         return Ok(out);
     }
@@ -685,7 +813,7 @@ fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, String> {
 }
 
 /// What `obj::parse` returns.
-type ObjParse = Result<Option<Parsed>, String>;
+type ObjParse = Result<Option<Parsed>, ObjError>;
 
 /// The bytes of text `gunzip_parse` inflates before it hands them to a parse.
 const GUNZIP_PIECE: usize = 2 << 20;
@@ -763,9 +891,9 @@ fn gunzip_parse(
                         .iter()
                         .map(|h| super::error::line_of_bytes(h, h.len()) - 1)
                         .sum();
-                    let (line, why) = super::obj::junk(&rest[..filled], false)
-                        .unwrap_or((1, "not an OBJ text".into()));
-                    junk = Some(format!("line {}: {why}", before as u32 + line));
+                    let why = super::obj::junk(&rest[..filled], false)
+                        .unwrap_or(ObjError::NotText { line: 1 });
+                    junk = Some(why.after(before as u32));
                     break;
                 } else {
                     searched = filled;
@@ -831,8 +959,80 @@ impl Drop for Gunzip {
 
 #[cfg(test)]
 mod tests {
-    use super::{Normals, Transform, gunzip_parse};
-    use crate::scene::obj;
+    use super::{FaceError, MeshError, Normals, Transform, gunzip_parse};
+    use crate::scene::{ObjError, ReadError, Scene, SceneError, obj};
+    use std::path::Path;
+
+    /// A scene of one mesh `m.obj` (scaled by `scale` in x), read through `read`.
+    fn one_mesh(scale: &str, read: &crate::scene::ReadFile<'_>) -> Result<Scene, SceneError> {
+        let src = format!(
+            "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 45.0\n\
+             width = 4\nheight = 4\n[materials.m]\nmodel = \"ambient\"\nka = [1.0, 1.0, 1.0]\n\
+             [[meshes]]\nfile = \"m.obj\"\nmaterial = \"m\"\nscale = [{scale}, 1.0, 1.0]\n"
+        );
+        Scene::parse_with(&src, Path::new("s.toml"), read)
+    }
+
+    /// `one_mesh` with `obj` as the mesh's text.
+    fn with_obj(scale: &str, obj: &str) -> Result<Scene, SceneError> {
+        one_mesh(scale, &|_: &Path| Ok(obj.as_bytes().to_vec()))
+    }
+
+    /// The mesh error inside a scene error, which must name the entry's line and key.
+    fn mesh_error(e: &SceneError) -> &MeshError {
+        match e {
+            SceneError::Mesh {
+                line, key, error, ..
+            } => {
+                assert_eq!((*line, key.as_str()), (11, "meshes[0].file"), "{e}");
+                error
+            }
+            _ => panic!("not a mesh error: {e}"),
+        }
+    }
+
+    #[test]
+    fn mesh_errors_are_typed_and_print_file_line_key_and_the_meshs_line() {
+        let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        let e = with_obj("1.0", &format!("{tri}f 1 2 9\n")).unwrap_err();
+        assert!(matches!(
+            mesh_error(&e),
+            MeshError::Obj(ObjError::VertexIndex {
+                line: 4,
+                index: 9,
+                defined: 3
+            })
+        ));
+        assert_eq!(
+            e.to_string(),
+            "s.toml:11: meshes[0].file: mesh m.obj: line 4: face vertex index 9 is out of range (3 vertices defined before it)"
+        );
+        let e = with_obj("1e30", &format!("v 1e10 0 0\n{tri}f 1 2 3\nf 2 3 4\n")).unwrap_err();
+        assert!(matches!(
+            mesh_error(&e),
+            MeshError::Face {
+                face: 0,
+                why: FaceError::Overflow
+            }
+        ));
+        assert!(
+            e.to_string()
+                .ends_with("mesh m.obj: face 0: the transform overflows f32")
+        );
+        let e = one_mesh("1.0", &|_: &Path| Err(ReadError::Other("gone".into()))).unwrap_err();
+        assert!(matches!(
+            mesh_error(&e),
+            MeshError::Read(ReadError::Other(_))
+        ));
+        assert_eq!(e.to_string(), "s.toml:11: meshes[0].file: mesh m.obj: gone");
+        let e = with_obj("1.0", "# nothing\n").unwrap_err();
+        assert!(matches!(mesh_error(&e), MeshError::Empty));
+        // The twins: the same mesh with its faces in range, and a scale that keeps f32,
+        // loads.
+        let ok = with_obj("1e30", &format!("{tri}f 1 2 3\n")).unwrap();
+        assert_eq!(ok.triangles.len(), 1);
+        assert!(with_obj("1e20", &format!("v 1e10 0 0\n{tri}f 1 2 3\n")).is_ok());
+    }
 
     fn gz(bytes: &[u8]) -> Vec<u8> {
         use std::io::Write;
@@ -842,7 +1042,7 @@ mod tests {
     }
 
     /// `obj::parse`'s result (or error) as text, to compare whole results.
-    fn shown(r: &Result<Option<obj::Parsed>, String>) -> String {
+    fn shown(r: &Result<Option<obj::Parsed>, obj::ObjError>) -> String {
         format!("{r:?}")
     }
 

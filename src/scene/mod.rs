@@ -13,6 +13,8 @@ use std::sync::Arc;
 
 pub use error::{SceneError, line_of};
 use format::{SceneFile, Vec3File};
+pub use mesh::{FaceError, MeshError};
+pub use obj::ObjError;
 use toml::Spanned;
 
 /// The largest width or height accepted (the GPU renders larger frames in tiles).
@@ -381,23 +383,23 @@ struct Validator<'a> {
     cache: Option<&'a Arc<crate::cache::Cache>>,
 }
 
-/// How a scene reads the files it names (meshes and their MTLs): the bytes, or a message.
-pub type ReadFile<'a> = dyn Fn(&Path) -> Result<Vec<u8>, String> + 'a;
+/// How a scene reads the files it names (meshes and their MTLs): the bytes, or why not.
+pub type ReadFile<'a> = dyn Fn(&Path) -> Result<Vec<u8>, ReadError> + 'a;
 
 /// [`ReadFile`] from the file system: regular files only, at most the default input limit
 /// ([`LoadOptions`]).
-pub fn read_from_disk(path: &Path) -> Result<Vec<u8>, String> {
+pub fn read_from_disk(path: &Path) -> Result<Vec<u8>, ReadError> {
     read_from_disk_limited(path, LoadOptions::default().max_input_bytes)
 }
 
 /// [`read_from_disk`] with at most `limit` bytes.
-pub fn read_from_disk_limited(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
-    read_limited(path, limit).map_err(|e| e.to_string())
+pub fn read_from_disk_limited(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+    read_limited(path, limit)
 }
 
 /// A [`ReadFile`] that reads only files whose real path (symbolic links followed) lies
 /// below `root`, which must itself be canonical; at most the default input limit.
-pub fn confined_reader(root: PathBuf) -> impl Fn(&Path) -> Result<Vec<u8>, String> {
+pub fn confined_reader(root: PathBuf) -> impl Fn(&Path) -> Result<Vec<u8>, ReadError> {
     confined_reader_limited(root, LoadOptions::default().max_input_bytes)
 }
 
@@ -405,15 +407,14 @@ pub fn confined_reader(root: PathBuf) -> impl Fn(&Path) -> Result<Vec<u8>, Strin
 pub fn confined_reader_limited(
     root: PathBuf,
     limit: u64,
-) -> impl Fn(&Path) -> Result<Vec<u8>, String> {
+) -> impl Fn(&Path) -> Result<Vec<u8>, ReadError> {
     move |path: &Path| {
-        let real = std::fs::canonicalize(path).map_err(|e| format!("cannot read: {e}"))?;
+        let real = std::fs::canonicalize(path).map_err(ReadError::Io)?;
         if !real.starts_with(&root) {
-            return Err(format!(
-                "{} is outside the scene's folder {} (--confine)",
-                real.display(),
-                root.display()
-            ));
+            return Err(ReadError::Outside {
+                path: real,
+                root: root.clone(),
+            });
         }
         read_from_disk_limited(&real, limit)
     }
@@ -439,6 +440,19 @@ pub enum ReadError {
         .0 >> 20
     )]
     TooLarge(u64),
+    /// In confined mode ([`LoadOptions::confine`]), a file whose real path is not below the
+    /// scene's folder.
+    #[error("{path} is outside the scene's folder {root} (--confine)")]
+    Outside {
+        /// The file's real path (symbolic links followed).
+        path: PathBuf,
+        /// The scene's folder, canonical.
+        root: PathBuf,
+    },
+    /// Any other reason a [`ReadFile`] gives, printed as it is (a reader that serves files
+    /// from memory has reasons of its own).
+    #[error("{0}")]
+    Other(String),
 }
 
 fn kind_of(t: std::fs::FileType) -> &'static str {
@@ -835,5 +849,40 @@ impl Validator<'_> {
             ks,
             n,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{ReadError, confined_reader};
+
+    #[test]
+    fn a_confined_reader_refuses_what_is_outside_its_folder() {
+        let d = std::env::temp_dir().join(format!("glint-confine-unit-{}", std::process::id()));
+        let inside = d.join("in");
+        std::fs::create_dir_all(&inside).unwrap();
+        std::fs::write(d.join("out.obj"), "v 0 0 0\n").unwrap();
+        std::fs::write(inside.join("in.obj"), "v 0 0 0\n").unwrap();
+        let root = std::fs::canonicalize(&inside).unwrap();
+        let read = confined_reader(root.clone());
+        let e = read(&inside.join("../out.obj")).unwrap_err();
+        let out = std::fs::canonicalize(d.join("out.obj")).unwrap();
+        assert!(
+            matches!(&e, ReadError::Outside { path, root: r } if *path == out && *r == root),
+            "{e:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "{} is outside the scene's folder {} (--confine)",
+                out.display(),
+                root.display()
+            )
+        );
+        // The twin: the file inside is read; one missing is an I/O error.
+        assert_eq!(read(&inside.join("in.obj")).unwrap(), b"v 0 0 0\n");
+        let e = read(&inside.join("missing.obj")).unwrap_err();
+        assert!(matches!(e, ReadError::Io(_)) && e.to_string().starts_with("cannot read: "));
+        let _ = std::fs::remove_dir_all(&d);
     }
 }
