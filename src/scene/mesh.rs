@@ -3,11 +3,15 @@
 
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
+
+use toml::Spanned;
 
 use super::format::MeshFile;
 use super::obj::{NO_NORMAL, Normals, ObjError, Parsed};
 use super::{Material, Model, ReadError, SceneError, SmoothNormals, Triangle, Validator, line_of};
+use crate::cache::{Cache, Key};
 
 /// What is wrong with a mesh file (an OBJ, or the MTL it names), in its own terms: where
 /// the scene names it, [`SceneError::Mesh`] says (scene file, line, key, mesh file).
@@ -271,7 +275,10 @@ fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>,
         .collect()
 }
 
-/// Loads mesh entry `i` into `triangles` (and its MTL materials into `materials`).
+/// Loads mesh entry `i` into `triangles` (and its MTL materials into `materials`). Three
+/// ways, each ending in [`Entry::complete`]: from the cache (a large mesh that glint's
+/// reader placed before), by glint's reader (the scene names the material and the OBJ holds
+/// only positions and faces), or by tobj (anything else).
 pub(super) fn load(
     v: &Validator<'_>,
     i: usize,
@@ -281,29 +288,133 @@ pub(super) fn load(
     smooth: &mut Vec<SmoothNormals>,
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
-    let key = format!("meshes[{i}].file");
-    let normals = if m.smooth == Some(true) {
-        Normals::Read
-    } else {
-        Normals::Skip
+    let entry = Entry::new(v, i, m);
+    let mut out = Out {
+        materials,
+        triangles,
+        smooth,
+        warnings,
     };
-    let line = line_of(v.src, m.file.span().start);
-    let base = v.path.parent().unwrap_or(Path::new("."));
-    let obj_path = base.join(m.file.get_ref());
-    let fail = |error: MeshError| SceneError::Mesh {
-        file: v.path.to_owned(),
-        line,
-        key: key.clone(),
-        mesh: obj_path.clone(),
-        error: Box::new(error),
-    };
-    let raw = crate::stages::time("read", || (v.read)(&obj_path))
-        .map_err(|e| fail(MeshError::Read(e)))?;
+    let raw = crate::stages::time("read", || (v.read)(&entry.obj_path))
+        .map_err(|e| entry.fail(MeshError::Read(e)))?;
     let xf = mesh_transform(v, i, m)?;
-    // A large mesh placed by glint's own reader may be in the cache (see `crate::cache`):
-    // its key is the file's bytes, the transform and how normals are read.
-    let cache = v.cache.filter(|_| m.material.is_some());
-    let cache_key = cache.map(|cache| {
+    let cached = entry.cache_key(&raw, &xf);
+    if let (Some(name), Some((cache, key))) = (&m.material, &cached)
+        && let Some(hit) = crate::stages::time("cache read", || CachedMesh::load(cache, key))
+    {
+        drop(raw);
+        return entry.add_cached(name, hit, &mut out);
+    }
+    let (mut bytes, early) = entry.unpack(raw)?;
+    let t_check = std::time::Instant::now();
+    // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
+    // first line as an unknown keyword.
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        entry.fail(MeshError::NotUtf8 {
+            line: super::error::line_of_bytes(&bytes, e.valid_up_to()),
+        })
+    })?;
+    if let Some(name) = &m.material {
+        let parsed = match early {
+            Some(parsed) => parsed,
+            None => crate::stages::time("OBJ parse", || super::obj::parse(text, entry.normals)),
+        }
+        .map_err(|e| entry.fail(MeshError::Obj(e)))?;
+        if let Some(parsed) = parsed {
+            drop(bytes); // the text is parsed: free it before the triangles are placed
+            return entry.add_parsed(name, parsed, &xf, cached, &mut out);
+        }
+    }
+    entry.add_with_tobj(&bytes, text, &xf, t_check, &mut out)
+}
+
+/// One `[[meshes]]` entry being loaded: where the scene names it (for its errors and
+/// warnings) and how its file is read.
+struct Entry<'e> {
+    v: &'e Validator<'e>,
+    /// Its index in `[[meshes]]`.
+    i: usize,
+    m: &'e MeshFile,
+    /// `meshes[i].file`.
+    key: String,
+    /// The scene's line of the entry's `file`.
+    line: usize,
+    /// The OBJ, relative to the scene's folder.
+    obj_path: PathBuf,
+    /// Whether the normals are read (a smooth mesh).
+    normals: Normals,
+}
+
+/// What a mesh entry adds to: the scene's lists as far as they are built.
+struct Out<'o> {
+    materials: &'o mut Vec<Material>,
+    triangles: &'o mut Vec<Triangle>,
+    smooth: &'o mut Vec<SmoothNormals>,
+    warnings: &'o mut Vec<String>,
+}
+
+/// The faces of fewer than three vertices that a mesh dropped: how many, and the line of
+/// the first.
+#[derive(Clone, Copy)]
+struct ShortFaces {
+    count: usize,
+    first: usize,
+}
+
+impl ShortFaces {
+    /// Those of a parse's `short_faces` (lines in file order); `None` when there are none.
+    fn of(lines: &[usize]) -> Option<ShortFaces> {
+        lines.first().map(|&first| ShortFaces {
+            count: lines.len(),
+            first,
+        })
+    }
+}
+
+impl<'e> Entry<'e> {
+    fn new(v: &'e Validator<'e>, i: usize, m: &'e MeshFile) -> Entry<'e> {
+        let base = v.path.parent().unwrap_or(Path::new("."));
+        Entry {
+            v,
+            i,
+            m,
+            key: format!("meshes[{i}].file"),
+            line: line_of(v.src, m.file.span().start),
+            obj_path: base.join(m.file.get_ref()),
+            normals: if m.smooth == Some(true) {
+                Normals::Read
+            } else {
+                Normals::Skip
+            },
+        }
+    }
+
+    /// `error` as the scene's: naming the scene file, the line, the key and the mesh.
+    fn fail(&self, error: MeshError) -> SceneError {
+        SceneError::Mesh {
+            file: self.v.path.to_owned(),
+            line: self.line,
+            key: self.key.clone(),
+            mesh: self.obj_path.clone(),
+            error: Box::new(error),
+        }
+    }
+
+    /// The index of the material the entry names, among the scene's `materials` so far.
+    fn material(&self, name: &Spanned<String>, materials: &[Material]) -> Result<u32, SceneError> {
+        let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
+        let key = format!("meshes[{}].material", self.i);
+        self.v.material_index(&names, name, &key)
+    }
+
+    /// Where a mesh that glint's reader places may be cached (see `crate::cache`), and its
+    /// key: the file's bytes as read (`raw`), the transform, how normals are read, whether
+    /// it is gzipped, and the input limit. `None` without a cache or a named material.
+    fn cache_key(&self, raw: &[u8], xf: &Transform) -> Option<(&'e Arc<Cache>, Key)> {
+        let cache = self.v.cache.filter(|_| self.m.material.is_some())?;
         let xf_bits: Vec<u8> = [xf.scale.to_array(), xf.translate.to_array()]
             .into_iter()
             .flatten()
@@ -311,286 +422,341 @@ pub(super) fn load(
             .flat_map(f64::to_le_bytes)
             .collect();
         let settings = [
-            (normals == Normals::Read) as u8,
-            obj_path.extension().is_some_and(|e| e == "gz") as u8,
+            (self.normals == Normals::Read) as u8,
+            self.obj_path.extension().is_some_and(|e| e == "gz") as u8,
         ];
-        let key =
-            crate::cache::Key::new("mesh", &[&raw, &xf_bits, &settings, &v.limit.to_le_bytes()]);
-        (cache, key)
-    });
-    if let (Some(name), Some((cache, ckey))) = (&m.material, &cache_key)
-        && let Some(entry) = crate::stages::time("cache read", || CachedMesh::load(cache, ckey))
-    {
-        drop(raw);
-        let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
-        let material = v.material_index(&names, name, &format!("meshes[{i}].material"))?;
-        if let Some(first) = entry.first_short_face {
-            warnings.push(format!(
-                "{}:{line}: {key}: {}: {}",
-                v.path.display(),
-                obj_path.display(),
-                short_face_warning(entry.short_faces, first)
-            ));
-        }
-        if let Some(normals) = entry.normals {
-            smooth.push(SmoothNormals {
-                first: triangles.len(),
-                normals,
-            });
-        }
-        let before = triangles.len();
-        triangles.extend(
-            entry
-                .vertices
+        let limit = self.v.limit.to_le_bytes();
+        Some((cache, Key::new("mesh", &[raw, &xf_bits, &settings, &limit])))
+    }
+
+    /// The OBJ's text bytes from the file's (`raw`), and the parse when it came with them:
+    /// a gzipped OBJ for glint's own reader is parsed as it is inflated (`gunzip_parse`);
+    /// where that does not apply (see there) it is gunzipped whole (`gunzip`), then parsed.
+    fn unpack(&self, raw: Vec<u8>) -> Result<(Vec<u8>, Option<ObjParse>), SceneError> {
+        let is_gz = self.obj_path.extension().is_some_and(|e| e == "gz");
+        let early = (self.m.material.is_some() && is_gz)
+            .then(|| gunzip_parse(&raw, self.normals, GUNZIP_PIECE, self.v.limit))
+            .flatten();
+        Ok(match early {
+            Some((bytes, parsed)) => (bytes, Some(parsed)),
+            None => (
+                gunzip(&self.obj_path, raw, self.v.limit).map_err(|e| self.fail(e))?,
+                None,
+            ),
+        })
+    }
+
+    /// A mesh from the cache, of the material `name`.
+    fn add_cached(
+        &self,
+        name: &Spanned<String>,
+        hit: CachedMesh,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let material = self.material(name, out.materials)?;
+        let before = out.triangles.len();
+        out.triangles.extend(
+            hit.vertices
                 .into_iter()
                 .map(|vertices| Triangle { vertices, material }),
         );
-        return finish(v, line, &key, &triangles[before..], &fail, warnings);
+        self.complete(before, hit.short_faces, hit.normals, out)
     }
-    // A gzipped OBJ for glint's own reader is parsed as it is inflated (`gunzip_parse`);
-    // where that does not apply (see there) it is gunzipped whole, then parsed.
-    let is_gz = obj_path.extension().is_some_and(|e| e == "gz");
-    let early = (m.material.is_some() && is_gz)
-        .then(|| gunzip_parse(&raw, normals, GUNZIP_PIECE, v.limit))
-        .flatten();
-    let (mut bytes, mut early) = match early {
-        Some((bytes, parsed)) => (bytes, Some(parsed)),
-        None => (gunzip(&obj_path, raw, v.limit).map_err(&fail)?, None),
-    };
-    let t_check = std::time::Instant::now();
-    // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
-    // first line as an unknown keyword.
-    if bytes.starts_with(b"\xEF\xBB\xBF") {
-        bytes.drain(..3);
-    }
-    let text = match std::str::from_utf8(&bytes) {
-        Ok(t) => t,
-        Err(e) => {
-            let text = String::from_utf8_lossy(&bytes);
-            return Err(fail(MeshError::NotUtf8 {
-                line: line_of(&text, e.valid_up_to()),
-            }));
-        }
-    };
-    // glint's own parallel reader when the scene names the material and the OBJ holds only
-    // positions and faces (tobj otherwise).
-    if let Some(name) = &m.material {
-        let parsed = match early.take() {
-            Some(parsed) => parsed,
-            None => crate::stages::time("OBJ parse", || super::obj::parse(text, normals)),
-        }
-        .map_err(|e| fail(MeshError::Obj(e)))?;
-        if let Some(parsed) = parsed {
-            drop(bytes); // the text is parsed: free it before the triangles are placed
-            let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
-            let material = v.material_index(&names, name, &format!("meshes[{i}].material"))?;
-            if let Some(first) = parsed.short_faces.first() {
-                warnings.push(format!(
-                    "{}:{line}: {key}: {}: {}",
-                    v.path.display(),
-                    obj_path.display(),
-                    short_face_warning(parsed.short_faces.len(), *first)
-                ));
-            }
-            let t = std::time::Instant::now();
-            // Each position transformed once, then the triangles gathered from them: the same
-            // numbers as transforming each triangle's corners (`Transform::apply` is a pure
-            // function of the position).
-            let placed: Vec<Triangle> = {
-                use rayon::prelude::*;
-                let moved: Vec<[f32; 3]> =
-                    parsed.vertices.par_iter().map(|&p| xf.apply(p)).collect();
-                // Gathered straight into place (an indexed collect: no partial lists to
-                // join, as collecting `Result`s would make), the first face that fails
-                // `check_placed` noted on the way. A position that is not finite is not
-                // finite once transformed either (inf·0 and NaN stay NaN), so checking
-                // the transformed corners finds every failing face.
-                let first_bad = AtomicUsize::new(usize::MAX);
-                let placed: Vec<Triangle> = parsed
-                    .triangles
-                    .par_iter()
-                    .enumerate()
-                    .map(|(f, ix)| {
-                        let vertices = ix.map(|k| moved[k as usize]);
-                        if vertices.iter().flatten().any(|x| !x.is_finite()) {
-                            first_bad.fetch_min(f, Ordering::Relaxed);
-                        }
-                        Triangle { vertices, material }
-                    })
-                    .collect();
-                let f = first_bad.into_inner();
-                if f != usize::MAX {
-                    let ix = parsed.triangles[f];
-                    let ps = ix.map(|k| parsed.vertices[k as usize]);
-                    // A corner is not finite, so `check_placed` says which way.
-                    if let Err(why) = check_placed(ps, ix.map(|k| moved[k as usize])) {
-                        return Err(fail(MeshError::Face { face: f, why }));
-                    }
-                }
-                placed
-            };
-            crate::stages::record("transform", t.elapsed());
-            let corner = if normals == Normals::Read {
-                let t = std::time::Instant::now();
-                let n = corner_normals(&parsed, &xf).map_err(&fail)?;
-                crate::stages::record("normals", t.elapsed());
-                Some(n)
-            } else {
-                None
-            };
-            if let Some((cache, ckey)) = cache_key.filter(|(c, _)| c.worth(placed.len())) {
-                crate::stages::time("cache write", || {
-                    CachedMesh::store(
-                        cache,
-                        &ckey,
-                        &placed,
-                        corner.as_deref(),
-                        &parsed.short_faces,
-                    )
-                });
-            }
-            if let Some(normals) = corner {
-                smooth.push(SmoothNormals {
-                    first: triangles.len(),
-                    normals,
-                });
-            }
-            let before = triangles.len();
-            if triangles.is_empty() {
-                *triangles = placed; // moved, not copied (35 MB for the dragon)
-            } else {
-                triangles.extend(placed);
-            }
-            return finish(v, line, &key, &triangles[before..], &fail, warnings);
-        }
-    }
-    let checked = super::obj::check(text, normals).map_err(|e| fail(MeshError::Obj(e)))?;
-    let short_faces = &checked.short_faces;
-    crate::stages::record("OBJ check", t_check.elapsed());
-    if let Some(first) = short_faces.first() {
-        warnings.push(format!(
-            "{}:{line}: {key}: {}: {}",
-            v.path.display(),
-            obj_path.display(),
-            short_face_warning(short_faces.len(), *first)
-        ));
-    }
-    let opts = tobj::LoadOptions {
-        triangulate: true,
-        single_index: false,
-        ignore_points: true,
-        ignore_lines: true,
-    };
-    let obj_dir = obj_path.parent().unwrap_or(Path::new(".")).to_owned();
-    let mtl_problem = std::cell::RefCell::new(None::<MeshError>);
-    let t_parse = std::time::Instant::now();
-    let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(&bytes[..]), &opts, |p| {
-        let mtl = (v.read)(&obj_dir.join(p)).map_err(|error| {
-            *mtl_problem.borrow_mut() = Some(MeshError::MtlRead {
-                path: obj_dir.join(p),
-                error,
+
+    /// A mesh that glint's reader parsed, of the material `name`: placed, its corner
+    /// normals computed when it is smooth, and stored in `cached` when it is worth it.
+    fn add_parsed(
+        &self,
+        name: &Spanned<String>,
+        parsed: Parsed,
+        xf: &Transform,
+        cached: Option<(&Arc<Cache>, Key)>,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let material = self.material(name, out.materials)?;
+        let placed = crate::stages::time("transform", || place_parsed(&parsed, xf, material))
+            .map_err(|e| self.fail(e))?;
+        let corner = match self.normals {
+            Normals::Read => Some(
+                crate::stages::time("normals", || corner_normals(&parsed, xf))
+                    .map_err(|e| self.fail(e))?,
+            ),
+            Normals::Skip => None,
+        };
+        if let Some((cache, key)) = cached.filter(|(c, _)| c.worth(placed.len())) {
+            crate::stages::time("cache write", || {
+                CachedMesh::store(cache, &key, &placed, corner.as_deref(), &parsed.short_faces)
             });
+        }
+        let short = ShortFaces::of(&parsed.short_faces);
+        drop(parsed);
+        let before = out.triangles.len();
+        if out.triangles.is_empty() {
+            *out.triangles = placed; // moved, not copied (35 MB for the dragon)
+        } else {
+            out.triangles.extend(placed);
+        }
+        self.complete(before, short, corner, out)
+    }
+
+    /// A mesh that tobj reads (`bytes`, whose `text` glint's reader checks first, so that
+    /// its errors name lines), with the materials of its MTL unless the entry names one.
+    fn add_with_tobj(
+        &self,
+        bytes: &[u8],
+        text: &str,
+        xf: &Transform,
+        t_check: std::time::Instant,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let checked =
+            super::obj::check(text, self.normals).map_err(|e| self.fail(MeshError::Obj(e)))?;
+        crate::stages::record("OBJ check", t_check.elapsed());
+        let t_parse = std::time::Instant::now();
+        let (models, mtl) = self.tobj_parse(bytes)?;
+        let named = match &self.m.material {
+            Some(name) => Some(self.material(name, out.materials)?),
+            None => None,
+        };
+        // The MTL's materials, appended once, in file order.
+        let mtl_base = out.materials.len() as u32;
+        let mtl = match (named, mtl) {
+            (Some(_), _) => Vec::new(),
+            (None, Ok(m)) => m,
+            (None, Err(e)) => return Err(self.fail(e)),
+        };
+        self.add_mtl_materials(&mtl, out.materials)
+            .map_err(|e| self.fail(e))?;
+        crate::stages::record("OBJ parse", t_parse.elapsed());
+        let before = out.triangles.len();
+        let material = |model: &tobj::Model| match (named, model.mesh.material_id) {
+            (Some(k), _) => Some(k),
+            (None, Some(id)) if id < mtl.len() => Some(mtl_base + id as u32),
+            _ => None,
+        };
+        crate::stages::time("transform", || {
+            place_models(&models, material, xf, out.triangles)
+        })
+        .map_err(|e| self.fail(e))?;
+        let corner = match self.normals {
+            Normals::Read => {
+                // glint's reader gives tobj's triangles in tobj's order (tested in `obj`),
+                // so the corner normals line up with the triangles just placed.
+                let placed = out.triangles.len() - before;
+                if checked.triangles.len() != placed {
+                    return Err(self.fail(MeshError::Unpaired {
+                        ours: checked.triangles.len(),
+                        tobj: placed,
+                    }));
+                }
+                Some(
+                    crate::stages::time("normals", || corner_normals(&checked, xf))
+                        .map_err(|e| self.fail(e))?,
+                )
+            }
+            Normals::Skip => None,
+        };
+        self.complete(before, ShortFaces::of(&checked.short_faces), corner, out)
+    }
+
+    /// tobj's objects in `bytes`, and the materials of the MTL it names (or why not: what
+    /// the MTL's reader found wrong, else what tobj said).
+    #[allow(clippy::type_complexity)]
+    fn tobj_parse(
+        &self,
+        bytes: &[u8],
+    ) -> Result<(Vec<tobj::Model>, Result<Vec<tobj::Material>, MeshError>), SceneError> {
+        let opts = tobj::LoadOptions {
+            triangulate: true,
+            single_index: false,
+            ignore_points: true,
+            ignore_lines: true,
+        };
+        let obj_dir = self.obj_path.parent().unwrap_or(Path::new("."));
+        let problem = std::cell::RefCell::new(None::<MeshError>);
+        let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(bytes), &opts, |p| {
+            self.read_mtl(obj_dir, p, &problem)
+        })
+        .map_err(|e| self.fail(problem.borrow_mut().take().unwrap_or(MeshError::Tobj(e))))?;
+        let mtl = mtl.map_err(|e| problem.borrow_mut().take().unwrap_or(MeshError::TobjMtl(e)));
+        Ok((models, mtl))
+    }
+
+    /// The MTL `p` that the OBJ names, for tobj: read through the scene's reader, and
+    /// refused before tobj sees it when it is not an MTL text or has a colour that tobj 4
+    /// would panic on. What was wrong is left in `problem`, for the error.
+    fn read_mtl(
+        &self,
+        obj_dir: &Path,
+        p: &Path,
+        problem: &std::cell::RefCell<Option<MeshError>>,
+    ) -> tobj::MTLLoadResult {
+        let path = obj_dir.join(p);
+        let mtl = (self.v.read)(&path).map_err(|error| {
+            *problem.borrow_mut() = Some(MeshError::MtlRead { path, error });
             tobj::LoadError::OpenFileFailed
         })?;
         if let Some(error) = mtl_junk(&mtl).or_else(|| short_colour(&mtl)) {
-            *mtl_problem.borrow_mut() = Some(MeshError::Mtl {
+            *problem.borrow_mut() = Some(MeshError::Mtl {
                 file: p.to_owned(),
                 error,
             });
             return Err(tobj::LoadError::MaterialParseError);
         }
         tobj::load_mtl_buf(&mut BufReader::new(&mtl[..]))
-    })
-    .map_err(|e| match mtl_problem.borrow_mut().take() {
-        Some(m) => fail(m),
-        None => fail(MeshError::Tobj(e)),
-    })?;
-
-    let named = match &m.material {
-        Some(name) => {
-            let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
-            Some(v.material_index(&names, name, &format!("meshes[{i}].material"))?)
-        }
-        None => None,
-    };
-    // The MTL's materials, appended once, in file order.
-    let mtl_base = materials.len() as u32;
-    let mtl = match (named, mtl) {
-        (Some(_), _) => Vec::new(),
-        (None, Ok(m)) => m,
-        (None, Err(e)) => {
-            return Err(fail(
-                mtl_problem
-                    .borrow_mut()
-                    .take()
-                    .unwrap_or(MeshError::TobjMtl(e)),
-            ));
-        }
-    };
-    for (k, mm) in mtl.iter().enumerate() {
-        let ka = mm.ambient.unwrap_or([0.0; 3]);
-        let kd = mm.diffuse.unwrap_or([0.8; 3]);
-        let ks = mm.specular.unwrap_or([0.0; 3]);
-        let n = mm.shininess.unwrap_or(0.0);
-        if [ka, kd, ks]
-            .iter()
-            .flatten()
-            .chain([&n])
-            .any(|x| !x.is_finite() || *x < 0.0)
-        {
-            return Err(fail(MeshError::MtlValue {
-                name: mm.name.clone(),
-            }));
-        }
-        if [ka, kd, ks]
-            .iter()
-            .flatten()
-            .any(|&x| x > super::MAX_COLOUR)
-        {
-            return Err(fail(MeshError::MtlColour {
-                name: mm.name.clone(),
-            }));
-        }
-        materials.push(Material {
-            name: format!("{}#{k}:{}", m.file.get_ref(), mm.name),
-            model: if ks == [0.0; 3] {
-                Model::Diffuse
-            } else {
-                Model::Phong
-            },
-            ka,
-            kd,
-            ks,
-            n,
-        });
     }
 
-    crate::stages::record("OBJ parse", t_parse.elapsed());
-    let t_xf = std::time::Instant::now();
-    let before = triangles.len();
-    for model in &models {
-        let mesh = &model.mesh;
-        let material = match (named, mesh.material_id) {
-            (Some(k), _) => k,
-            (None, Some(id)) if id < mtl.len() => mtl_base + id as u32,
-            _ => {
-                return Err(fail(MeshError::NoMaterial {
-                    object: model.name.clone(),
-                }));
+    /// The MTL's materials appended to `materials`, in file order, each checked (finite,
+    /// not negative, no colour above `MAX_COLOUR`) and named `file#k:name`.
+    fn add_mtl_materials(
+        &self,
+        mtl: &[tobj::Material],
+        materials: &mut Vec<Material>,
+    ) -> Result<(), MeshError> {
+        for (k, mm) in mtl.iter().enumerate() {
+            let ka = mm.ambient.unwrap_or([0.0; 3]);
+            let kd = mm.diffuse.unwrap_or([0.8; 3]);
+            let ks = mm.specular.unwrap_or([0.0; 3]);
+            let n = mm.shininess.unwrap_or(0.0);
+            let name = || mm.name.clone();
+            if [ka, kd, ks]
+                .iter()
+                .flatten()
+                .chain([&n])
+                .any(|x| !x.is_finite() || *x < 0.0)
+            {
+                return Err(MeshError::MtlValue { name: name() });
             }
+            if [ka, kd, ks]
+                .iter()
+                .flatten()
+                .any(|&x| x > super::MAX_COLOUR)
+            {
+                return Err(MeshError::MtlColour { name: name() });
+            }
+            materials.push(Material {
+                name: format!("{}#{k}:{}", self.m.file.get_ref(), mm.name),
+                model: if ks == [0.0; 3] {
+                    Model::Diffuse
+                } else {
+                    Model::Phong
+                },
+                ka,
+                kd,
+                ks,
+                n,
+            });
+        }
+        Ok(())
+    }
+
+    /// The end of every way in: the warning for the faces dropped, the smooth normals of
+    /// the triangles from `before` on, and the checks on those triangles: none is an
+    /// error, zero-area ones a warning.
+    fn complete(
+        &self,
+        before: usize,
+        short: Option<ShortFaces>,
+        normals: Option<Vec<[[f32; 3]; 3]>>,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let (path, line, key) = (self.v.path.display(), self.line, &self.key);
+        if let Some(short) = short {
+            out.warnings.push(format!(
+                "{path}:{line}: {key}: {}: {}",
+                self.obj_path.display(),
+                short_face_warning(short)
+            ));
+        }
+        if let Some(normals) = normals {
+            out.smooth.push(SmoothNormals {
+                first: before,
+                normals,
+            });
+        }
+        let added = &out.triangles[before..];
+        if added.is_empty() {
+            return Err(self.fail(MeshError::Empty));
+        }
+        let degenerate = {
+            use rayon::prelude::*;
+            added
+                .par_iter()
+                .filter(|t| is_degenerate(&t.vertices))
+                .count()
         };
+        if degenerate > 0 {
+            out.warnings.push(format!(
+                "{path}:{line}: {key}: {degenerate} zero-area triangles (never hit)"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `parsed`'s triangles placed by `xf`, of `material`. Each position is transformed once,
+/// then the triangles gathered from them: the same numbers as transforming each
+/// triangle's corners (`Transform::apply` is a pure function of the position).
+fn place_parsed(
+    parsed: &Parsed,
+    xf: &Transform,
+    material: u32,
+) -> Result<Vec<Triangle>, MeshError> {
+    use rayon::prelude::*;
+    let moved: Vec<[f32; 3]> = parsed.vertices.par_iter().map(|&p| xf.apply(p)).collect();
+    // Gathered straight into place (an indexed collect: no partial lists to join, as
+    // collecting `Result`s would make), the first face that fails `check_placed` noted on
+    // the way. A position that is not finite is not finite once transformed either (inf·0
+    // and NaN stay NaN), so checking the transformed corners finds every failing face.
+    let first_bad = AtomicUsize::new(usize::MAX);
+    let placed: Vec<Triangle> = parsed
+        .triangles
+        .par_iter()
+        .enumerate()
+        .map(|(f, ix)| {
+            let vertices = ix.map(|k| moved[k as usize]);
+            if vertices.iter().flatten().any(|x| !x.is_finite()) {
+                first_bad.fetch_min(f, Ordering::Relaxed);
+            }
+            Triangle { vertices, material }
+        })
+        .collect();
+    let f = first_bad.into_inner();
+    if f != usize::MAX {
+        let ix = parsed.triangles[f];
+        let ps = ix.map(|k| parsed.vertices[k as usize]);
+        // A corner is not finite, so `check_placed` says which way.
+        if let Err(why) = check_placed(ps, ix.map(|k| moved[k as usize])) {
+            return Err(MeshError::Face { face: f, why });
+        }
+    }
+    Ok(placed)
+}
+
+/// tobj's objects placed by `xf` into `triangles`, each of its `material` (an error where
+/// it has none).
+fn place_models(
+    models: &[tobj::Model],
+    material: impl Fn(&tobj::Model) -> Option<u32>,
+    xf: &Transform,
+    triangles: &mut Vec<Triangle>,
+) -> Result<(), MeshError> {
+    for model in models {
+        let mesh = &model.mesh;
+        let object = || model.name.clone();
+        let material = material(model).ok_or_else(|| MeshError::NoMaterial { object: object() })?;
         let n_vertices = mesh.positions.len() / 3;
         for (f, tri) in mesh.indices.chunks_exact(3).enumerate() {
             let mut ps = [[0.0f32; 3]; 3];
             for (slot, &ix) in ps.iter_mut().zip(tri) {
                 let ix = ix as usize;
                 if ix >= n_vertices {
-                    return Err(fail(MeshError::ObjectIndex {
-                        object: model.name.clone(),
+                    return Err(MeshError::ObjectIndex {
+                        object: object(),
                         face: f,
                         index: ix + 1,
                         vertices: n_vertices,
-                    }));
+                    });
                 }
                 *slot = [
                     mesh.positions[3 * ix],
@@ -598,34 +764,15 @@ pub(super) fn load(
                     mesh.positions[3 * ix + 2],
                 ];
             }
-            let vertices = place(&xf, ps).map_err(|why| {
-                fail(MeshError::ObjectFace {
-                    object: model.name.clone(),
-                    face: f,
-                    why,
-                })
+            let vertices = place(xf, ps).map_err(|why| MeshError::ObjectFace {
+                object: object(),
+                face: f,
+                why,
             })?;
             triangles.push(Triangle { vertices, material });
         }
     }
-    crate::stages::record("transform", t_xf.elapsed());
-    if normals == Normals::Read {
-        // glint's reader gives tobj's triangles in tobj's order (tested in `obj`), so the
-        // corner normals line up with the triangles just placed.
-        if checked.triangles.len() != triangles.len() - before {
-            return Err(fail(MeshError::Unpaired {
-                ours: checked.triangles.len(),
-                tobj: triangles.len() - before,
-            }));
-        }
-        let t = std::time::Instant::now();
-        smooth.push(SmoothNormals {
-            first: before,
-            normals: corner_normals(&checked, &xf).map_err(&fail)?,
-        });
-        crate::stages::record("normals", t.elapsed());
-    }
-    finish(v, line, &key, &triangles[before..], &fail, warnings)
+    Ok(())
 }
 
 /// The mesh entry's transform, its values checked.
@@ -665,36 +812,9 @@ fn check_placed(ps: [[f32; 3]; 3], vs: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], F
     Ok(vs)
 }
 
-/// The checks after a mesh's triangles are in: none is an error; zero-area ones a warning.
-fn finish(
-    v: &Validator<'_>,
-    line: usize,
-    key: &str,
-    added: &[Triangle],
-    fail: &dyn Fn(MeshError) -> SceneError,
-    warnings: &mut Vec<String>,
-) -> Result<(), SceneError> {
-    if added.is_empty() {
-        return Err(fail(MeshError::Empty));
-    }
-    let degenerate = {
-        use rayon::prelude::*;
-        added
-            .par_iter()
-            .filter(|t| is_degenerate(&t.vertices))
-            .count()
-    };
-    if degenerate > 0 {
-        warnings.push(format!(
-            "{}:{line}: {key}: {degenerate} zero-area triangles (never hit)",
-            v.path.display()
-        ));
-    }
-    Ok(())
-}
-
-/// The warning for `n` faces of fewer than three vertices, the first on line `first`.
-fn short_face_warning(n: usize, first: usize) -> String {
+/// The warning for the faces of fewer than three vertices that a mesh dropped.
+fn short_face_warning(short: ShortFaces) -> String {
+    let ShortFaces { count: n, first } = short;
     format!(
         "{n} face(s) with fewer than three vertices dropped (line {first}{})",
         if n > 1 { " and others" } else { "" }
@@ -728,26 +848,24 @@ fn short_colour(mtl: &[u8]) -> Option<ObjError> {
 struct CachedMesh {
     vertices: Vec<[[f32; 3]; 3]>,
     normals: Option<Vec<[[f32; 3]; 3]>>,
-    short_faces: usize,
-    first_short_face: Option<usize>,
+    short_faces: Option<ShortFaces>,
 }
 
 impl CachedMesh {
-    fn load(cache: &crate::cache::Cache, key: &crate::cache::Key) -> Option<CachedMesh> {
+    fn load(cache: &Cache, key: &Key) -> Option<CachedMesh> {
         let mut s = cache.load("mesh", key)?.into_iter();
         let (vertices, normals, short) = (s.next()?, s.next()?, s.next()?);
-        let (short_faces, first) = (*short.first()? as usize, *short.get(1)? as usize);
+        let (count, first) = (*short.first()? as usize, *short.get(1)? as usize);
         Some(CachedMesh {
             vertices: crate::cache::section_as(vertices),
             normals: (!normals.is_empty()).then(|| crate::cache::section_as(normals)),
-            short_faces,
-            first_short_face: (short_faces > 0).then_some(first),
+            short_faces: (count > 0).then_some(ShortFaces { count, first }),
         })
     }
 
     fn store(
-        cache: &std::sync::Arc<crate::cache::Cache>,
-        key: &crate::cache::Key,
+        cache: &Arc<Cache>,
+        key: &Key,
         placed: &[Triangle],
         normals: Option<&[[[f32; 3]; 3]]>,
         short_faces: &[usize],
