@@ -209,7 +209,8 @@ pub enum CacheError {
     /// The file ends before its header does.
     #[error("shorter than its header")]
     ShortHeader,
-    /// The first bytes are not [`MAGIC`]: another file, or another format's entry.
+    /// The first bytes are not those of an entry of this format: another file, or an entry
+    /// of another format version.
     #[error("not a glint cache entry of this format")]
     Format,
     /// The header names another key: the file was renamed or copied.

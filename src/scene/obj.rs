@@ -44,7 +44,7 @@ pub enum ObjError {
         /// The line of the first NUL.
         line: u32,
     },
-    /// A line longer than [`MAX_LINE_BYTES`]: not a text file.
+    /// A line longer than 1 MiB (`MAX_LINE_BYTES`): not a text file.
     #[error(
         "line {line}: a line longer than {} MiB: this is not an OBJ or MTL text",
         MAX_LINE_BYTES >> 20
