@@ -154,7 +154,8 @@ impl SceneBuffers {
         crate::stages::record("flatten", t_flat.elapsed());
         SceneBuffers {
             normals,
-            ..SceneBuffers::assemble(
+            ..SceneBuffers::assemble_cached(
+                scene.cache.as_deref(),
                 params,
                 spheres,
                 triangles,
@@ -212,7 +213,25 @@ impl SceneBuffers {
         algo: TriangleAlgorithm,
         shadows: bool,
     ) -> Self {
-        let bvh = cached_bvh(&spheres, &triangles);
+        Self::assemble_cached(
+            None, params, spheres, triangles, materials, lights, algo, shadows,
+        )
+    }
+
+    /// [`SceneBuffers::assemble`], the BVH read from `cache` or stored there when it holds
+    /// it or the scene is worth it (a scene's [`Scene::cache`]).
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_cached(
+        cache: Option<&crate::cache::Cache>,
+        params: Params,
+        spheres: Vec<Sphere>,
+        triangles: Vec<Triangle>,
+        materials: Vec<Material>,
+        lights: Vec<Light>,
+        algo: TriangleAlgorithm,
+        shadows: bool,
+    ) -> Self {
+        let bvh = cached_bvh(cache, &spheres, &triangles);
         SceneBuffers {
             params: Params {
                 n_spheres: spheres.len() as u32,
@@ -338,14 +357,18 @@ impl Specialisation {
     }
 }
 
-/// The BVH over `spheres` and `triangles`: from the cache when it holds this scene's tree
-/// (keyed by the primitives' bytes, see [`crate::cache`]), else built (and stored, when the
-/// scene is large enough to be worth it).
-fn cached_bvh(spheres: &[Sphere], triangles: &[Triangle]) -> Bvh {
+/// The BVH over `spheres` and `triangles`: from `cache` when it holds this scene's tree
+/// (keyed by the primitives' bytes, see [`crate::cache`]), else built (and stored, when
+/// there is a cache and the scene is large enough to be worth it).
+fn cached_bvh(
+    cache: Option<&crate::cache::Cache>,
+    spheres: &[Sphere],
+    triangles: &[Triangle],
+) -> Bvh {
     let n = spheres.len() + triangles.len();
-    if !crate::cache::worth(n) {
+    let Some(cache) = cache.filter(|c| c.worth(n)) else {
         return crate::stages::time("BVH build", || Bvh::build(spheres, triangles));
-    }
+    };
     let key = crate::cache::Key::new(
         "bvh",
         &[
@@ -354,7 +377,7 @@ fn cached_bvh(spheres: &[Sphere], triangles: &[Triangle]) -> Bvh {
         ],
     );
     let hit = crate::stages::time("cache read", || {
-        let mut s = crate::cache::load("bvh", &key)?.into_iter();
+        let mut s = cache.load("bvh", &key)?.into_iter();
         let (nodes, prim_ids, stats) = (s.next()?, s.next()?, s.next()?);
         Some(Bvh {
             nodes: crate::cache::section_as(nodes),
@@ -369,7 +392,7 @@ fn cached_bvh(spheres: &[Sphere], triangles: &[Triangle]) -> Bvh {
     let bvh = crate::stages::time("BVH build", || Bvh::build(spheres, triangles));
     crate::stages::time("cache write", || {
         let stats = [bvh.depth as u32, bvh.largest_leaf as u32];
-        crate::cache::store(
+        cache.store(
             "bvh",
             &key,
             &[bytemuck::cast_slice(&bvh.nodes), &bvh.prim_ids, &stats],

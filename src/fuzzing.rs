@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use crate::buffers::{SceneBuffers, Specialisation};
-use crate::scene::Scene;
+use crate::scene::{ReadError, Scene};
 
 /// A valid scene is flattened, its BVH built, and rendered small on the CPU mirror.
 fn render_small(scene: &Scene) {
@@ -19,7 +19,9 @@ fn render_small(scene: &Scene) {
 /// without touching the disk.
 pub fn scene_parse(data: &[u8]) -> Result<(), String> {
     let src = std::str::from_utf8(data).map_err(|e| e.to_string())?;
-    let no_files = |_: &Path| -> Result<Vec<u8>, String> { Err("no files while fuzzing".into()) };
+    let no_files = |_: &Path| -> Result<Vec<u8>, ReadError> {
+        Err(ReadError::Other("no files while fuzzing".into()))
+    };
     let scene =
         Scene::parse_with(src, Path::new("fuzz.toml"), &no_files).map_err(|e| e.to_string())?;
     render_small(&scene);
@@ -48,7 +50,7 @@ pub fn obj_load(data: &[u8]) -> Result<(), String> {
         Some(k) => (&data[..k], &data[k + 1..]),
         None => (data, &[][..]),
     };
-    let files = |p: &Path| -> Result<Vec<u8>, String> {
+    let files = |p: &Path| -> Result<Vec<u8>, ReadError> {
         Ok(if p.extension().is_some_and(|e| e == "obj") {
             obj.to_vec()
         } else {

@@ -5,6 +5,7 @@
 mod cli;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -12,6 +13,7 @@ use clap::Parser;
 use cli::args::{Cli, Command, CommonArgs, FrameArgs};
 use cli::env::{cache_settings, gpu_options, max_input_bytes};
 use cli::progress::ProgressBar;
+use glint::cache::Cache;
 use glint::render::{Event, Job, Output};
 use glint::scene::Scene;
 use glint::{RenderOptions, Renderer};
@@ -28,9 +30,6 @@ fn main() {
         std::process::exit(130);
     });
     let result = run(Cli::parse());
-    // Cache entries still being written (`cache::write_behind`) are finished, whatever
-    // happened, so that the next render finds them.
-    let _ = glint::cache::finish_writes();
     if let Err(e) = result {
         eprintln!("error: {e:#}");
         std::process::exit(1);
@@ -91,13 +90,26 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-/// The scene at `path`, read with the command line's limits.
-fn load(path: &Path, confine: bool) -> Result<Scene> {
+/// The scene at `path`, read with the command line's limits and `cache`.
+fn load(path: &Path, confine: bool, cache: Option<Arc<Cache>>) -> Result<Scene> {
     let options = glint::scene::LoadOptions {
         max_input_bytes: max_input_bytes(),
         confine,
+        cache,
     };
     Ok(Scene::load_with(path, &options)?)
+}
+
+/// Waits, when dropped, for the cache's entries still being written behind, so that the
+/// next render finds them whatever happened to this one.
+struct FinishWrites(Option<Arc<Cache>>);
+
+impl Drop for FinishWrites {
+    fn drop(&mut self) {
+        if let Some(c) = &self.0 {
+            let _ = c.finish_writes();
+        }
+    }
 }
 
 fn options(frame: FrameArgs) -> RenderOptions {
@@ -119,14 +131,13 @@ fn render(
     common: CommonArgs,
 ) -> Result<()> {
     let start = Instant::now();
-    if let Some(dir) = glint::cache::default_dir().filter(|_| !no_cache) {
-        glint::cache::enable(cache_settings(dir));
-        // `main` waits for the writes before the process ends.
-        glint::cache::write_behind(true);
-    }
+    let cache = glint::cache::default_dir()
+        .filter(|_| !no_cache)
+        .map(|dir| Arc::new(Cache::new(cache_settings(dir))));
+    let _finish = FinishWrites(cache.clone());
     // Before any work: the folder exists and a file can be made there.
     let output = Output::file(output)?;
-    let scene = load(scene, common.confine)?;
+    let scene = load(scene, common.confine, cache)?;
     let renderer = Renderer::with_options(backend, &gpu_options(common.adapter.as_deref()))?;
     let bar = ProgressBar::new(Instant::now());
     let report = Job::new(scene, output)
@@ -157,7 +168,7 @@ fn render(
 
 fn compare(scene: &Path, frame: FrameArgs, common: CommonArgs, diff: &Path) -> Result<()> {
     glint::image::check_extension(diff)?;
-    let s = load(scene, common.confine)?;
+    let s = load(scene, common.confine, None)?;
     let gpu = glint::gpu::Gpu::with_options(&gpu_options(common.adapter.as_deref()))?;
     let report = glint::render::compare(&s, &options(frame), &gpu)?;
     for w in &report.warnings {
@@ -263,7 +274,7 @@ fn bench(
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let mut s = load(p, confine)?;
+        let mut s = load(p, confine, None)?;
         for w in &s.warnings {
             eprintln!("warning: {w}");
         }

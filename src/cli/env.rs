@@ -62,6 +62,8 @@ pub fn cache_settings(dir: std::path::PathBuf) -> glint::cache::Settings {
     if let Some(n) = var("GLINT_CACHE_MIN_PRIMS") {
         s.min_prims = n as usize;
     }
+    // The render waits for the writes before it ends (`FinishWrites` in main.rs).
+    s.write_behind = true;
     s
 }
 

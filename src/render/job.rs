@@ -28,7 +28,7 @@ fn band_rows(w: u32, h: u32, mib: u64) -> u32 {
 }
 
 /// Something a render should tell its user; it goes on, and the image is what it would be.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Debug)]
 pub enum Warning {
     /// From reading the scene (a degenerate triangle skipped, a mesh's normals, ...), with
     /// its file and line.
@@ -37,13 +37,17 @@ pub enum Warning {
     /// geometry, `scene::range`).
     Range(String),
     /// The cache could not read or write an entry (the render is unaffected).
-    Cache(String),
+    Cache(crate::cache::Event),
 }
 
 impl fmt::Display for Warning {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Warning::Scene(m) | Warning::Range(m) | Warning::Cache(m) => f.write_str(m),
+            Warning::Scene(m) | Warning::Range(m) => f.write_str(m),
+            Warning::Cache(e) => {
+                let m = e.to_string();
+                f.write_str(m.strip_prefix("warning: ").unwrap_or(&m))
+            }
         }
     }
 }
@@ -74,7 +78,7 @@ pub enum Event<'e> {
     /// A note (also kept in [`RenderReport::notes`]).
     Note(&'e Note),
     /// What the cache did ("hit mesh", "stored bvh"): for a verbose front end.
-    Cache(&'e str),
+    Cache(&'e crate::cache::Event),
     /// Rows of the frame done so far, of `total`.
     Rows {
         /// Rows done.
@@ -166,8 +170,8 @@ enum Source<'a> {
 ///   size), after a check that it fits in memory.
 /// - `auto`: where the GPU cannot hold the scene, the CPU tracer renders it, with a
 ///   [`Note::Fallback`].
-/// - The scene's cache (when loaded with one) is drained of its events, and waited for
-///   before the report.
+/// - The scene's cache (`Scene::cache`, when it was loaded with one) is drained of its
+///   events, and its writes waited for before the report.
 /// - Warnings, notes, cache events and progress reach [`Job::on_event`] as they happen.
 pub struct Job<'a> {
     scene: Source<'a>,
@@ -194,13 +198,11 @@ impl Run<'_, '_> {
         self.notes.push(n);
     }
 
-    /// What the cache did since the last call: its warnings as warnings, the rest as
-    /// events.
-    fn drain_cache(&mut self) {
-        for e in crate::cache::take_events() {
-            if e.starts_with("warning") {
-                let m = e.strip_prefix("warning: ").unwrap_or(&e).to_string();
-                self.warn(Warning::Cache(m));
+    /// What `cache` did since the last call: its warnings as warnings, the rest as events.
+    fn drain_cache(&mut self, cache: Option<&crate::cache::Cache>) {
+        for e in cache.map(|c| c.take_events()).unwrap_or_default() {
+            if e.is_warning() {
+                self.warn(Warning::Cache(e));
             } else {
                 (self.events)(Event::Cache(&e));
             }
@@ -271,8 +273,9 @@ impl<'a> Job<'a> {
             _ => SceneBuffers::new(pick(&owned, borrowed), w, h, algo),
         };
         let scene = pick(&owned, borrowed);
+        let cache = scene.cache.as_deref();
         options.apply(&mut buf);
-        run.drain_cache();
+        run.drain_cache(cache);
         if let Some(note) = renderer.note() {
             run.note(Note::Backend(note.to_string()));
         }
@@ -280,10 +283,10 @@ impl<'a> Job<'a> {
         let traced = trace(renderer, scene, &mut buf, &mut sink, &mut run)?;
         let image = crate::stages::time("write", || sink.finish())?;
         let t_wait = Instant::now();
-        if crate::cache::finish_writes() > 0 {
+        if cache.is_some_and(|c| c.finish_writes() > 0) {
             crate::stages::record("cache wait", t_wait.elapsed());
         }
-        run.drain_cache();
+        run.drain_cache(cache);
         crate::stages::record("trace", traced.frame);
         Ok(RenderReport {
             output,

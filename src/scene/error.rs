@@ -38,7 +38,7 @@ pub enum SceneError {
         message: String,
     },
     /// A mesh file is bad.
-    #[error("{file}:{line}: {key}: mesh {mesh}: {message}")]
+    #[error("{file}:{line}: {key}: mesh {mesh}: {error}")]
     Mesh {
         /// The scene file.
         file: PathBuf,
@@ -48,8 +48,10 @@ pub enum SceneError {
         key: String,
         /// The OBJ file.
         mesh: PathBuf,
-        /// What is wrong with it.
-        message: String,
+        /// What is wrong with it (or with its MTL), in the file's own terms: its line where
+        /// it has one. In the message, so not also a `source`: printed once. Boxed, so that
+        /// every `Result` of the loader stays small.
+        error: Box<super::MeshError>,
     },
 }
 

@@ -2,12 +2,149 @@
 //! scene or from the OBJ's MTL, then scale, rotate (x, then y, then z) and translate.
 
 use std::io::BufReader;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use toml::Spanned;
+
 use super::format::MeshFile;
-use super::obj::{NO_NORMAL, Normals, Parsed};
-use super::{Material, Model, SceneError, SmoothNormals, Triangle, Validator, line_of};
+use super::obj::{NO_NORMAL, Normals, ObjError, Parsed};
+use super::{Material, Model, ReadError, SceneError, SmoothNormals, Triangle, Validator, line_of};
+use crate::cache::{Cache, Key};
+
+/// What is wrong with a mesh file (an OBJ, or the MTL it names), in its own terms: where
+/// the scene names it, [`SceneError::Mesh`] says (scene file, line, key, mesh file).
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// The OBJ could not be read.
+    #[error("{0}")]
+    Read(ReadError),
+    /// The `.gz` does not inflate.
+    #[error("cannot gunzip: {0}")]
+    Gunzip(std::io::Error),
+    /// The `.gz` inflates to more than the input limit.
+    #[error(
+        "unpacks to more than the input limit of {} MiB (set GLINT_MAX_INPUT_MIB to raise it)",
+        .limit >> 20
+    )]
+    Unpacked {
+        /// The limit, bytes ([`super::LoadOptions::max_input_bytes`]).
+        limit: u64,
+    },
+    /// The OBJ is not UTF-8.
+    #[error("not UTF-8 at line {line}")]
+    NotUtf8 {
+        /// The line (from 1) of its first byte that is not.
+        line: usize,
+    },
+    /// The OBJ's text is wrong at one of its lines.
+    #[error("{0}")]
+    Obj(ObjError),
+    /// A triangle of glint's reader (numbered from 0 in file order) cannot be placed.
+    #[error("face {face}: {why}")]
+    Face {
+        /// The triangle.
+        face: usize,
+        /// What is wrong with it.
+        why: FaceError,
+    },
+    /// An MTL the OBJ names could not be read.
+    #[error("MTL {path}: {error}")]
+    MtlRead {
+        /// The MTL, as found next to the OBJ.
+        path: PathBuf,
+        /// Why.
+        error: ReadError,
+    },
+    /// An MTL the OBJ names is wrong at one of its lines.
+    #[error("{file}: {error}")]
+    Mtl {
+        /// The MTL, as the OBJ names it.
+        file: PathBuf,
+        /// What is wrong, at its line.
+        error: ObjError,
+    },
+    /// tobj refused the OBJ.
+    #[error("cannot parse OBJ: {0}")]
+    Tobj(tobj::LoadError),
+    /// tobj refused the OBJ's MTL.
+    #[error("cannot load its MTL: {0}")]
+    TobjMtl(tobj::LoadError),
+    /// An MTL material with a negative or non-finite value.
+    #[error("MTL material {name:?} has a negative or non-finite value")]
+    MtlValue {
+        /// Its name in the MTL.
+        name: String,
+    },
+    /// An MTL material with a colour component above [`super::MAX_COLOUR`].
+    #[error(
+        "MTL material {name:?} has a colour component above {:e}",
+        super::MAX_COLOUR
+    )]
+    MtlColour {
+        /// Its name in the MTL.
+        name: String,
+    },
+    /// An object of the OBJ has no material: neither the scene nor an MTL gives one.
+    #[error("object {object:?} has no material: name one with `material =` or give the OBJ an MTL")]
+    NoMaterial {
+        /// The object's name.
+        object: String,
+    },
+    /// A face of a tobj object names a position the object does not have.
+    #[error(
+        "object {object:?}, face {face}: vertex index {index} is out of range (the object has {vertices} vertices)"
+    )]
+    ObjectIndex {
+        /// The object's name.
+        object: String,
+        /// The triangle, from 0 within the object.
+        face: usize,
+        /// The index, from 1.
+        index: usize,
+        /// The object's positions.
+        vertices: usize,
+    },
+    /// A triangle of a tobj object cannot be placed.
+    #[error("object {object:?}, face {face}: {why}")]
+    ObjectFace {
+        /// The object's name.
+        object: String,
+        /// The triangle, from 0 within the object.
+        face: usize,
+        /// What is wrong with it.
+        why: FaceError,
+    },
+    /// A smooth mesh whose triangles glint's reader and tobj count differently, so its
+    /// normals cannot be paired with its faces.
+    #[error(
+        "smooth: the OBJ reader found {ours} triangles where tobj found {tobj}; cannot pair normals with faces"
+    )]
+    Unpaired {
+        /// glint's count.
+        ours: usize,
+        /// tobj's count.
+        tobj: usize,
+    },
+    /// No triangles.
+    #[error("no triangles: the mesh is empty")]
+    Empty,
+}
+
+/// What is wrong with one triangle as the entry's transform places it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum FaceError {
+    /// A corner of the file's is not finite.
+    #[error("a vertex is not finite")]
+    NotFinite,
+    /// A corner is finite in the file but not once transformed.
+    #[error("the transform overflows f32")]
+    Overflow,
+    /// A corner's normal has no direction once transformed.
+    #[error("its normal does not survive the transform (a zero scale component?)")]
+    NormalLost,
+}
 
 /// Whether a triangle has zero area in f64 (collinear or coincident vertices).
 pub fn is_degenerate(v: &[[f32; 3]; 3]) -> bool {
@@ -97,7 +234,7 @@ fn area_weighted(vertices: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<glam::DVe
 /// triangle's own normal where that is zero), each rounded to f32 as a file would hold
 /// it, then carried by the transform. A mesh without `vn` thus gets exactly the normals of
 /// the same mesh with its computed normals written out as `vn`.
-fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>, String> {
+fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>, MeshError> {
     use rayon::prelude::*;
     let needs_computed = parsed.normal_ix.iter().flatten().any(|&k| k == NO_NORMAL);
     let acc = if needs_computed {
@@ -128,8 +265,9 @@ fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>,
                         .or_else(|| unit_f32((p1 - p0).cross(p2 - p0)))
                         .unwrap_or([0.0, 0.0, 1.0]) // zero area: never hit
                 };
-                out[c] = xf.apply_normal(object).ok_or_else(|| {
-                    format!("face {f}: its normal does not survive the transform (a zero scale component?)")
+                out[c] = xf.apply_normal(object).ok_or(MeshError::Face {
+                    face: f,
+                    why: FaceError::NormalLost,
                 })?;
             }
             Ok(out)
@@ -137,7 +275,10 @@ fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>,
         .collect()
 }
 
-/// Loads mesh entry `i` into `triangles` (and its MTL materials into `materials`).
+/// Loads mesh entry `i` into `triangles` (and its MTL materials into `materials`). Three
+/// ways, each ending in [`Entry::complete`]: from the cache (a large mesh that glint's
+/// reader placed before), by glint's reader (the scene names the material and the OBJ holds
+/// only positions and faces), or by tobj (anything else).
 pub(super) fn load(
     v: &Validator<'_>,
     i: usize,
@@ -147,27 +288,133 @@ pub(super) fn load(
     smooth: &mut Vec<SmoothNormals>,
     warnings: &mut Vec<String>,
 ) -> Result<(), SceneError> {
-    let key = format!("meshes[{i}].file");
-    let normals = if m.smooth == Some(true) {
-        Normals::Read
-    } else {
-        Normals::Skip
+    let entry = Entry::new(v, i, m);
+    let mut out = Out {
+        materials,
+        triangles,
+        smooth,
+        warnings,
     };
-    let line = line_of(v.src, m.file.span().start);
-    let base = v.path.parent().unwrap_or(Path::new("."));
-    let obj_path = base.join(m.file.get_ref());
-    let fail = |message: String| SceneError::Mesh {
-        file: v.path.to_owned(),
-        line,
-        key: key.clone(),
-        mesh: obj_path.clone(),
-        message,
-    };
-    let raw = crate::stages::time("read", || (v.read)(&obj_path)).map_err(&fail)?;
+    let raw = crate::stages::time("read", || (v.read)(&entry.obj_path))
+        .map_err(|e| entry.fail(MeshError::Read(e)))?;
     let xf = mesh_transform(v, i, m)?;
-    // A large mesh placed by glint's own reader may be in the cache (see `crate::cache`):
-    // its key is the file's bytes, the transform and how normals are read.
-    let cache_key = (m.material.is_some() && crate::cache::enabled()).then(|| {
+    let cached = entry.cache_key(&raw, &xf);
+    if let (Some(name), Some((cache, key))) = (&m.material, &cached)
+        && let Some(hit) = crate::stages::time("cache read", || CachedMesh::load(cache, key))
+    {
+        drop(raw);
+        return entry.add_cached(name, hit, &mut out);
+    }
+    let (mut bytes, early) = entry.unpack(raw)?;
+    let t_check = std::time::Instant::now();
+    // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
+    // first line as an unknown keyword.
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        entry.fail(MeshError::NotUtf8 {
+            line: super::error::line_of_bytes(&bytes, e.valid_up_to()),
+        })
+    })?;
+    if let Some(name) = &m.material {
+        let parsed = match early {
+            Some(parsed) => parsed,
+            None => crate::stages::time("OBJ parse", || super::obj::parse(text, entry.normals)),
+        }
+        .map_err(|e| entry.fail(MeshError::Obj(e)))?;
+        if let Some(parsed) = parsed {
+            drop(bytes); // the text is parsed: free it before the triangles are placed
+            return entry.add_parsed(name, parsed, &xf, cached, &mut out);
+        }
+    }
+    entry.add_with_tobj(&bytes, text, &xf, t_check, &mut out)
+}
+
+/// One `[[meshes]]` entry being loaded: where the scene names it (for its errors and
+/// warnings) and how its file is read.
+struct Entry<'e> {
+    v: &'e Validator<'e>,
+    /// Its index in `[[meshes]]`.
+    i: usize,
+    m: &'e MeshFile,
+    /// `meshes[i].file`.
+    key: String,
+    /// The scene's line of the entry's `file`.
+    line: usize,
+    /// The OBJ, relative to the scene's folder.
+    obj_path: PathBuf,
+    /// Whether the normals are read (a smooth mesh).
+    normals: Normals,
+}
+
+/// What a mesh entry adds to: the scene's lists as far as they are built.
+struct Out<'o> {
+    materials: &'o mut Vec<Material>,
+    triangles: &'o mut Vec<Triangle>,
+    smooth: &'o mut Vec<SmoothNormals>,
+    warnings: &'o mut Vec<String>,
+}
+
+/// The faces of fewer than three vertices that a mesh dropped: how many, and the line of
+/// the first.
+#[derive(Clone, Copy)]
+struct ShortFaces {
+    count: usize,
+    first: usize,
+}
+
+impl ShortFaces {
+    /// Those of a parse's `short_faces` (lines in file order); `None` when there are none.
+    fn of(lines: &[usize]) -> Option<ShortFaces> {
+        lines.first().map(|&first| ShortFaces {
+            count: lines.len(),
+            first,
+        })
+    }
+}
+
+impl<'e> Entry<'e> {
+    fn new(v: &'e Validator<'e>, i: usize, m: &'e MeshFile) -> Entry<'e> {
+        let base = v.path.parent().unwrap_or(Path::new("."));
+        Entry {
+            v,
+            i,
+            m,
+            key: format!("meshes[{i}].file"),
+            line: line_of(v.src, m.file.span().start),
+            obj_path: base.join(m.file.get_ref()),
+            normals: if m.smooth == Some(true) {
+                Normals::Read
+            } else {
+                Normals::Skip
+            },
+        }
+    }
+
+    /// `error` as the scene's: naming the scene file, the line, the key and the mesh.
+    fn fail(&self, error: MeshError) -> SceneError {
+        SceneError::Mesh {
+            file: self.v.path.to_owned(),
+            line: self.line,
+            key: self.key.clone(),
+            mesh: self.obj_path.clone(),
+            error: Box::new(error),
+        }
+    }
+
+    /// The index of the material the entry names, among the scene's `materials` so far.
+    fn material(&self, name: &Spanned<String>, materials: &[Material]) -> Result<u32, SceneError> {
+        let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
+        let key = format!("meshes[{}].material", self.i);
+        self.v.material_index(&names, name, &key)
+    }
+
+    /// Where a mesh that glint's reader places may be cached (see `crate::cache`), and its
+    /// key: the file's bytes as read (`raw`), the transform, how normals are read, whether
+    /// it is gzipped, and the input limit. `None` without a cache or a named material.
+    fn cache_key(&self, raw: &[u8], xf: &Transform) -> Option<(&'e Arc<Cache>, Key)> {
+        let cache = self.v.cache.filter(|_| self.m.material.is_some())?;
         let xf_bits: Vec<u8> = [xf.scale.to_array(), xf.translate.to_array()]
             .into_iter()
             .flatten()
@@ -175,284 +422,342 @@ pub(super) fn load(
             .flat_map(f64::to_le_bytes)
             .collect();
         let settings = [
-            (normals == Normals::Read) as u8,
-            obj_path.extension().is_some_and(|e| e == "gz") as u8,
+            (self.normals == Normals::Read) as u8,
+            self.obj_path.extension().is_some_and(|e| e == "gz") as u8,
         ];
-        crate::cache::Key::new("mesh", &[&raw, &xf_bits, &settings, &v.limit.to_le_bytes()])
-    });
-    if let (Some(name), Some(ckey)) = (&m.material, &cache_key)
-        && let Some(entry) = crate::stages::time("cache read", || CachedMesh::load(ckey))
-    {
-        drop(raw);
-        let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
-        let material = v.material_index(&names, name, &format!("meshes[{i}].material"))?;
-        if let Some(first) = entry.first_short_face {
-            warnings.push(format!(
-                "{}:{line}: {key}: {}: {}",
-                v.path.display(),
-                obj_path.display(),
-                short_face_warning(entry.short_faces, first)
-            ));
-        }
-        if let Some(normals) = entry.normals {
-            smooth.push(SmoothNormals {
-                first: triangles.len(),
-                normals,
-            });
-        }
-        let before = triangles.len();
-        triangles.extend(
-            entry
-                .vertices
+        let limit = self.v.limit.to_le_bytes();
+        Some((cache, Key::new("mesh", &[raw, &xf_bits, &settings, &limit])))
+    }
+
+    /// The OBJ's text bytes from the file's (`raw`), and the parse when it came with them:
+    /// a gzipped OBJ for glint's own reader is parsed as it is inflated (`gunzip_parse`);
+    /// where that does not apply (see there) it is gunzipped whole (`gunzip`), then parsed.
+    fn unpack(&self, raw: Vec<u8>) -> Result<(Vec<u8>, Option<ObjParse>), SceneError> {
+        let is_gz = self.obj_path.extension().is_some_and(|e| e == "gz");
+        let early = (self.m.material.is_some() && is_gz)
+            .then(|| gunzip_parse(&raw, self.normals, GUNZIP_PIECE, self.v.limit))
+            .flatten();
+        Ok(match early {
+            Some((bytes, parsed)) => (bytes, Some(parsed)),
+            None => (
+                gunzip(&self.obj_path, raw, self.v.limit).map_err(|e| self.fail(e))?,
+                None,
+            ),
+        })
+    }
+
+    /// A mesh from the cache, of the material `name`.
+    fn add_cached(
+        &self,
+        name: &Spanned<String>,
+        hit: CachedMesh,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let material = self.material(name, out.materials)?;
+        let before = out.triangles.len();
+        out.triangles.extend(
+            hit.vertices
                 .into_iter()
                 .map(|vertices| Triangle { vertices, material }),
         );
-        return finish(v, line, &key, &triangles[before..], &fail, warnings);
+        self.complete(before, hit.short_faces, hit.normals, out)
     }
-    // A gzipped OBJ for glint's own reader is parsed as it is inflated (`gunzip_parse`);
-    // where that does not apply (see there) it is gunzipped whole, then parsed.
-    let is_gz = obj_path.extension().is_some_and(|e| e == "gz");
-    let early = (m.material.is_some() && is_gz)
-        .then(|| gunzip_parse(&raw, normals, GUNZIP_PIECE, v.limit))
-        .flatten();
-    let (mut bytes, mut early) = match early {
-        Some((bytes, parsed)) => (bytes, Some(parsed)),
-        None => (gunzip(&obj_path, raw, v.limit).map_err(&fail)?, None),
-    };
-    let t_check = std::time::Instant::now();
-    // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
-    // first line as an unknown keyword.
-    if bytes.starts_with(b"\xEF\xBB\xBF") {
-        bytes.drain(..3);
+
+    /// A mesh that glint's reader parsed, of the material `name`: placed, its corner
+    /// normals computed when it is smooth, and stored in `cached` when it is worth it.
+    fn add_parsed(
+        &self,
+        name: &Spanned<String>,
+        parsed: Parsed,
+        xf: &Transform,
+        cached: Option<(&Arc<Cache>, Key)>,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let material = self.material(name, out.materials)?;
+        let placed = crate::stages::time("transform", || place_parsed(&parsed, xf, material))
+            .map_err(|e| self.fail(e))?;
+        let corner = match self.normals {
+            Normals::Read => Some(
+                crate::stages::time("normals", || corner_normals(&parsed, xf))
+                    .map_err(|e| self.fail(e))?,
+            ),
+            Normals::Skip => None,
+        };
+        if let Some((cache, key)) = cached.filter(|(c, _)| c.worth(placed.len())) {
+            crate::stages::time("cache write", || {
+                CachedMesh::store(cache, &key, &placed, corner.as_deref(), &parsed.short_faces)
+            });
+        }
+        let short = ShortFaces::of(&parsed.short_faces);
+        drop(parsed);
+        let before = out.triangles.len();
+        if out.triangles.is_empty() {
+            *out.triangles = placed; // moved, not copied (35 MB for the dragon)
+        } else {
+            out.triangles.extend(placed);
+        }
+        self.complete(before, short, corner, out)
     }
-    let text = match std::str::from_utf8(&bytes) {
-        Ok(t) => t,
-        Err(e) => {
-            let text = String::from_utf8_lossy(&bytes);
-            return Err(fail(format!(
-                "not UTF-8 at line {}",
-                line_of(&text, e.valid_up_to())
-            )));
-        }
-    };
-    // glint's own parallel reader when the scene names the material and the OBJ holds only
-    // positions and faces (tobj otherwise).
-    if let Some(name) = &m.material {
-        let parsed = match early.take() {
-            Some(parsed) => parsed,
-            None => crate::stages::time("OBJ parse", || super::obj::parse(text, normals)),
-        }
-        .map_err(&fail)?;
-        if let Some(parsed) = parsed {
-            drop(bytes); // the text is parsed: free it before the triangles are placed
-            let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
-            let material = v.material_index(&names, name, &format!("meshes[{i}].material"))?;
-            if let Some(first) = parsed.short_faces.first() {
-                warnings.push(format!(
-                    "{}:{line}: {key}: {}: {}",
-                    v.path.display(),
-                    obj_path.display(),
-                    short_face_warning(parsed.short_faces.len(), *first)
-                ));
-            }
-            let t = std::time::Instant::now();
-            // Each position transformed once, then the triangles gathered from them: the same
-            // numbers as transforming each triangle's corners (`Transform::apply` is a pure
-            // function of the position).
-            let placed: Vec<Triangle> = {
-                use rayon::prelude::*;
-                let moved: Vec<[f32; 3]> =
-                    parsed.vertices.par_iter().map(|&p| xf.apply(p)).collect();
-                // Gathered straight into place (an indexed collect: no partial lists to
-                // join, as collecting `Result`s would make), the first face that fails
-                // `check_placed` noted on the way. A position that is not finite is not
-                // finite once transformed either (inf·0 and NaN stay NaN), so checking
-                // the transformed corners finds every failing face.
-                let first_bad = AtomicUsize::new(usize::MAX);
-                let placed: Vec<Triangle> = parsed
-                    .triangles
-                    .par_iter()
-                    .enumerate()
-                    .map(|(f, ix)| {
-                        let vertices = ix.map(|k| moved[k as usize]);
-                        if vertices.iter().flatten().any(|x| !x.is_finite()) {
-                            first_bad.fetch_min(f, Ordering::Relaxed);
-                        }
-                        Triangle { vertices, material }
-                    })
-                    .collect();
-                let f = first_bad.into_inner();
-                if f != usize::MAX {
-                    let ix = parsed.triangles[f];
-                    let ps = ix.map(|k| parsed.vertices[k as usize]);
-                    // A corner is not finite, so `check_placed` says which way.
-                    if let Err(e) = check_placed(ps, ix.map(|k| moved[k as usize])) {
-                        return Err(fail(format!("face {f}: {e}")));
-                    }
+
+    /// A mesh that tobj reads (`bytes`, whose `text` glint's reader checks first, so that
+    /// its errors name lines), with the materials of its MTL unless the entry names one.
+    fn add_with_tobj(
+        &self,
+        bytes: &[u8],
+        text: &str,
+        xf: &Transform,
+        t_check: std::time::Instant,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let checked =
+            super::obj::check(text, self.normals).map_err(|e| self.fail(MeshError::Obj(e)))?;
+        crate::stages::record("OBJ check", t_check.elapsed());
+        let t_parse = std::time::Instant::now();
+        let (models, mtl) = self.tobj_parse(bytes)?;
+        let named = match &self.m.material {
+            Some(name) => Some(self.material(name, out.materials)?),
+            None => None,
+        };
+        // The MTL's materials, appended once, in file order.
+        let mtl_base = out.materials.len() as u32;
+        let mtl = match (named, mtl) {
+            (Some(_), _) => Vec::new(),
+            (None, Ok(m)) => m,
+            (None, Err(e)) => return Err(self.fail(e)),
+        };
+        self.add_mtl_materials(&mtl, out.materials)
+            .map_err(|e| self.fail(e))?;
+        crate::stages::record("OBJ parse", t_parse.elapsed());
+        let before = out.triangles.len();
+        let material = |model: &tobj::Model| match (named, model.mesh.material_id) {
+            (Some(k), _) => Some(k),
+            (None, Some(id)) if id < mtl.len() => Some(mtl_base + id as u32),
+            _ => None,
+        };
+        crate::stages::time("transform", || {
+            place_models(&models, material, xf, out.triangles)
+        })
+        .map_err(|e| self.fail(e))?;
+        let corner = match self.normals {
+            Normals::Read => {
+                // glint's reader gives tobj's triangles in tobj's order (tested in `obj`),
+                // so the corner normals line up with the triangles just placed.
+                let placed = out.triangles.len() - before;
+                if checked.triangles.len() != placed {
+                    return Err(self.fail(MeshError::Unpaired {
+                        ours: checked.triangles.len(),
+                        tobj: placed,
+                    }));
                 }
-                placed
-            };
-            crate::stages::record("transform", t.elapsed());
-            let corner = if normals == Normals::Read {
-                let t = std::time::Instant::now();
-                let n = corner_normals(&parsed, &xf).map_err(&fail)?;
-                crate::stages::record("normals", t.elapsed());
-                Some(n)
-            } else {
-                None
-            };
-            if let Some(ckey) = cache_key.filter(|_| crate::cache::worth(placed.len())) {
-                crate::stages::time("cache write", || {
-                    CachedMesh::store(&ckey, &placed, corner.as_deref(), &parsed.short_faces)
-                });
+                Some(
+                    crate::stages::time("normals", || corner_normals(&checked, xf))
+                        .map_err(|e| self.fail(e))?,
+                )
             }
-            if let Some(normals) = corner {
-                smooth.push(SmoothNormals {
-                    first: triangles.len(),
-                    normals,
-                });
-            }
-            let before = triangles.len();
-            if triangles.is_empty() {
-                *triangles = placed; // moved, not copied (35 MB for the dragon)
-            } else {
-                triangles.extend(placed);
-            }
-            return finish(v, line, &key, &triangles[before..], &fail, warnings);
-        }
+            Normals::Skip => None,
+        };
+        self.complete(before, ShortFaces::of(&checked.short_faces), corner, out)
     }
-    let checked = super::obj::check(text, normals).map_err(&fail)?;
-    let short_faces = &checked.short_faces;
-    crate::stages::record("OBJ check", t_check.elapsed());
-    if let Some(first) = short_faces.first() {
-        warnings.push(format!(
-            "{}:{line}: {key}: {}: {}",
-            v.path.display(),
-            obj_path.display(),
-            short_face_warning(short_faces.len(), *first)
-        ));
+
+    /// tobj's objects in `bytes`, and the materials of the MTL it names (or why not: what
+    /// the MTL's reader found wrong, else what tobj said).
+    #[allow(clippy::type_complexity)]
+    fn tobj_parse(
+        &self,
+        bytes: &[u8],
+    ) -> Result<(Vec<tobj::Model>, Result<Vec<tobj::Material>, MeshError>), SceneError> {
+        let opts = tobj::LoadOptions {
+            triangulate: true,
+            single_index: false,
+            ignore_points: true,
+            ignore_lines: true,
+        };
+        let obj_dir = self.obj_path.parent().unwrap_or(Path::new("."));
+        let problem = std::cell::RefCell::new(None::<MeshError>);
+        let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(bytes), &opts, |p| {
+            self.read_mtl(obj_dir, p, &problem)
+        })
+        .map_err(|e| self.fail(problem.borrow_mut().take().unwrap_or(MeshError::Tobj(e))))?;
+        let mtl = mtl.map_err(|e| problem.borrow_mut().take().unwrap_or(MeshError::TobjMtl(e)));
+        Ok((models, mtl))
     }
-    let opts = tobj::LoadOptions {
-        triangulate: true,
-        single_index: false,
-        ignore_points: true,
-        ignore_lines: true,
-    };
-    let obj_dir = obj_path.parent().unwrap_or(Path::new(".")).to_owned();
-    let mtl_problem = std::cell::RefCell::new(None::<String>);
-    let t_parse = std::time::Instant::now();
-    let (models, mtl) = tobj::load_obj_buf(&mut BufReader::new(&bytes[..]), &opts, |p| {
-        let mtl = (v.read)(&obj_dir.join(p)).map_err(|e| {
-            *mtl_problem.borrow_mut() = Some(format!("MTL {}: {e}", obj_dir.join(p).display()));
+
+    /// The MTL `p` that the OBJ names, for tobj: read through the scene's reader, and
+    /// refused before tobj sees it when it is not an MTL text or has a colour that tobj 4
+    /// would panic on. What was wrong is left in `problem`, for the error.
+    fn read_mtl(
+        &self,
+        obj_dir: &Path,
+        p: &Path,
+        problem: &std::cell::RefCell<Option<MeshError>>,
+    ) -> tobj::MTLLoadResult {
+        let path = obj_dir.join(p);
+        let mtl = (self.v.read)(&path).map_err(|error| {
+            *problem.borrow_mut() = Some(MeshError::MtlRead { path, error });
             tobj::LoadError::OpenFileFailed
         })?;
-        if let Some((line, why)) = mtl_junk(&mtl) {
-            *mtl_problem.borrow_mut() = Some(format!("{}: line {line}: {why}", p.display()));
-            return Err(tobj::LoadError::MaterialParseError);
-        }
-        if let Some(line) = short_colour_line(&mtl) {
-            *mtl_problem.borrow_mut() = Some(format!(
-                "{}: line {line}: a colour (Ka, Kd, Ks, Ke) needs three numbers",
-                p.display()
-            ));
+        if let Some(error) = mtl_junk(&mtl).or_else(|| short_colour(&mtl)) {
+            *problem.borrow_mut() = Some(MeshError::Mtl {
+                file: p.to_owned(),
+                error,
+            });
             return Err(tobj::LoadError::MaterialParseError);
         }
         tobj::load_mtl_buf(&mut BufReader::new(&mtl[..]))
-    })
-    .map_err(|e| match mtl_problem.borrow_mut().take() {
-        Some(m) => fail(m),
-        None => fail(format!("cannot parse OBJ: {e}")),
-    })?;
-
-    let named = match &m.material {
-        Some(name) => {
-            let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
-            Some(v.material_index(&names, name, &format!("meshes[{i}].material"))?)
-        }
-        None => None,
-    };
-    // The MTL's materials, appended once, in file order.
-    let mtl_base = materials.len() as u32;
-    let mtl = match (named, mtl) {
-        (Some(_), _) => Vec::new(),
-        (None, Ok(m)) => m,
-        (None, Err(e)) => {
-            return Err(fail(
-                mtl_problem
-                    .borrow_mut()
-                    .take()
-                    .unwrap_or_else(|| format!("cannot load its MTL: {e}")),
-            ));
-        }
-    };
-    for (k, mm) in mtl.iter().enumerate() {
-        let ka = mm.ambient.unwrap_or([0.0; 3]);
-        let kd = mm.diffuse.unwrap_or([0.8; 3]);
-        let ks = mm.specular.unwrap_or([0.0; 3]);
-        let n = mm.shininess.unwrap_or(0.0);
-        if [ka, kd, ks]
-            .iter()
-            .flatten()
-            .chain([&n])
-            .any(|x| !x.is_finite() || *x < 0.0)
-        {
-            return Err(fail(format!(
-                "MTL material {:?} has a negative or non-finite value",
-                mm.name
-            )));
-        }
-        if [ka, kd, ks]
-            .iter()
-            .flatten()
-            .any(|&x| x > super::MAX_COLOUR)
-        {
-            return Err(fail(format!(
-                "MTL material {:?} has a colour component above {:e}",
-                mm.name,
-                super::MAX_COLOUR
-            )));
-        }
-        materials.push(Material {
-            name: format!("{}#{k}:{}", m.file.get_ref(), mm.name),
-            model: if ks == [0.0; 3] {
-                Model::Diffuse
-            } else {
-                Model::Phong
-            },
-            ka,
-            kd,
-            ks,
-            n,
-            optics: super::Optics::default(),
-        });
     }
 
-    crate::stages::record("OBJ parse", t_parse.elapsed());
-    let t_xf = std::time::Instant::now();
-    let before = triangles.len();
-    for model in &models {
-        let mesh = &model.mesh;
-        let material = match (named, mesh.material_id) {
-            (Some(k), _) => k,
-            (None, Some(id)) if id < mtl.len() => mtl_base + id as u32,
-            _ => {
-                return Err(fail(format!(
-                    "object {:?} has no material: name one with `material =` or give the OBJ an MTL",
-                    model.name
-                )));
+    /// The MTL's materials appended to `materials`, in file order, each checked (finite,
+    /// not negative, no colour above `MAX_COLOUR`) and named `file#k:name`.
+    fn add_mtl_materials(
+        &self,
+        mtl: &[tobj::Material],
+        materials: &mut Vec<Material>,
+    ) -> Result<(), MeshError> {
+        for (k, mm) in mtl.iter().enumerate() {
+            let ka = mm.ambient.unwrap_or([0.0; 3]);
+            let kd = mm.diffuse.unwrap_or([0.8; 3]);
+            let ks = mm.specular.unwrap_or([0.0; 3]);
+            let n = mm.shininess.unwrap_or(0.0);
+            let name = || mm.name.clone();
+            if [ka, kd, ks]
+                .iter()
+                .flatten()
+                .chain([&n])
+                .any(|x| !x.is_finite() || *x < 0.0)
+            {
+                return Err(MeshError::MtlValue { name: name() });
             }
+            if [ka, kd, ks]
+                .iter()
+                .flatten()
+                .any(|&x| x > super::MAX_COLOUR)
+            {
+                return Err(MeshError::MtlColour { name: name() });
+            }
+            materials.push(Material {
+                name: format!("{}#{k}:{}", self.m.file.get_ref(), mm.name),
+                model: if ks == [0.0; 3] {
+                    Model::Diffuse
+                } else {
+                    Model::Phong
+                },
+                ka,
+                kd,
+                ks,
+                n,
+                optics: super::Optics::default(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The end of every way in: the warning for the faces dropped, the smooth normals of
+    /// the triangles from `before` on, and the checks on those triangles: none is an
+    /// error, zero-area ones a warning.
+    fn complete(
+        &self,
+        before: usize,
+        short: Option<ShortFaces>,
+        normals: Option<Vec<[[f32; 3]; 3]>>,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let (path, line, key) = (self.v.path.display(), self.line, &self.key);
+        if let Some(short) = short {
+            out.warnings.push(format!(
+                "{path}:{line}: {key}: {}: {}",
+                self.obj_path.display(),
+                short_face_warning(short)
+            ));
+        }
+        if let Some(normals) = normals {
+            out.smooth.push(SmoothNormals {
+                first: before,
+                normals,
+            });
+        }
+        let added = &out.triangles[before..];
+        if added.is_empty() {
+            return Err(self.fail(MeshError::Empty));
+        }
+        let degenerate = {
+            use rayon::prelude::*;
+            added
+                .par_iter()
+                .filter(|t| is_degenerate(&t.vertices))
+                .count()
         };
+        if degenerate > 0 {
+            out.warnings.push(format!(
+                "{path}:{line}: {key}: {degenerate} zero-area triangles (never hit)"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `parsed`'s triangles placed by `xf`, of `material`. Each position is transformed once,
+/// then the triangles gathered from them: the same numbers as transforming each
+/// triangle's corners (`Transform::apply` is a pure function of the position).
+fn place_parsed(
+    parsed: &Parsed,
+    xf: &Transform,
+    material: u32,
+) -> Result<Vec<Triangle>, MeshError> {
+    use rayon::prelude::*;
+    let moved: Vec<[f32; 3]> = parsed.vertices.par_iter().map(|&p| xf.apply(p)).collect();
+    // Gathered straight into place (an indexed collect: no partial lists to join, as
+    // collecting `Result`s would make), the first face that fails `check_placed` noted on
+    // the way. A position that is not finite is not finite once transformed either (inf·0
+    // and NaN stay NaN), so checking the transformed corners finds every failing face.
+    let first_bad = AtomicUsize::new(usize::MAX);
+    let placed: Vec<Triangle> = parsed
+        .triangles
+        .par_iter()
+        .enumerate()
+        .map(|(f, ix)| {
+            let vertices = ix.map(|k| moved[k as usize]);
+            if vertices.iter().flatten().any(|x| !x.is_finite()) {
+                first_bad.fetch_min(f, Ordering::Relaxed);
+            }
+            Triangle { vertices, material }
+        })
+        .collect();
+    let f = first_bad.into_inner();
+    if f != usize::MAX {
+        let ix = parsed.triangles[f];
+        let ps = ix.map(|k| parsed.vertices[k as usize]);
+        // A corner is not finite, so `check_placed` says which way.
+        if let Err(why) = check_placed(ps, ix.map(|k| moved[k as usize])) {
+            return Err(MeshError::Face { face: f, why });
+        }
+    }
+    Ok(placed)
+}
+
+/// tobj's objects placed by `xf` into `triangles`, each of its `material` (an error where
+/// it has none).
+fn place_models(
+    models: &[tobj::Model],
+    material: impl Fn(&tobj::Model) -> Option<u32>,
+    xf: &Transform,
+    triangles: &mut Vec<Triangle>,
+) -> Result<(), MeshError> {
+    for model in models {
+        let mesh = &model.mesh;
+        let object = || model.name.clone();
+        let material = material(model).ok_or_else(|| MeshError::NoMaterial { object: object() })?;
         let n_vertices = mesh.positions.len() / 3;
         for (f, tri) in mesh.indices.chunks_exact(3).enumerate() {
             let mut ps = [[0.0f32; 3]; 3];
             for (slot, &ix) in ps.iter_mut().zip(tri) {
                 let ix = ix as usize;
                 if ix >= n_vertices {
-                    return Err(fail(format!(
-                        "object {:?}, face {f}: vertex index {} is out of range (the object has {n_vertices} vertices)",
-                        model.name,
-                        ix + 1
-                    )));
+                    return Err(MeshError::ObjectIndex {
+                        object: object(),
+                        face: f,
+                        index: ix + 1,
+                        vertices: n_vertices,
+                    });
                 }
                 *slot = [
                     mesh.positions[3 * ix],
@@ -460,30 +765,15 @@ pub(super) fn load(
                     mesh.positions[3 * ix + 2],
                 ];
             }
-            let vertices = place(&xf, ps)
-                .map_err(|e| fail(format!("object {:?}, face {f}: {e}", model.name)))?;
+            let vertices = place(xf, ps).map_err(|why| MeshError::ObjectFace {
+                object: object(),
+                face: f,
+                why,
+            })?;
             triangles.push(Triangle { vertices, material });
         }
     }
-    crate::stages::record("transform", t_xf.elapsed());
-    if normals == Normals::Read {
-        // glint's reader gives tobj's triangles in tobj's order (tested in `obj`), so the
-        // corner normals line up with the triangles just placed.
-        if checked.triangles.len() != triangles.len() - before {
-            return Err(fail(format!(
-                "smooth: the OBJ reader found {} triangles where tobj found {}; cannot pair normals with faces",
-                checked.triangles.len(),
-                triangles.len() - before
-            )));
-        }
-        let t = std::time::Instant::now();
-        smooth.push(SmoothNormals {
-            first: before,
-            normals: corner_normals(&checked, &xf).map_err(&fail)?,
-        });
-        crate::stages::record("normals", t.elapsed());
-    }
-    finish(v, line, &key, &triangles[before..], &fail, warnings)
+    Ok(())
 }
 
 /// The mesh entry's transform, its values checked.
@@ -508,77 +798,50 @@ fn mesh_transform(v: &Validator<'_>, i: usize, m: &MeshFile) -> Result<Transform
 }
 
 /// One triangle's file positions, checked finite, transformed, checked again.
-fn place(xf: &Transform, ps: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], String> {
+fn place(xf: &Transform, ps: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], FaceError> {
     check_placed(ps, ps.map(|p| xf.apply(p)))
 }
 
 /// `vs`, the transformed `ps`, when both are finite.
-fn check_placed(ps: [[f32; 3]; 3], vs: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], String> {
+fn check_placed(ps: [[f32; 3]; 3], vs: [[f32; 3]; 3]) -> Result<[[f32; 3]; 3], FaceError> {
     if ps.iter().flatten().any(|x| !x.is_finite()) {
-        return Err("a vertex is not finite".into());
+        return Err(FaceError::NotFinite);
     }
     if vs.iter().flatten().any(|x| !x.is_finite()) {
-        return Err("the transform overflows f32".into());
+        return Err(FaceError::Overflow);
     }
     Ok(vs)
 }
 
-/// The checks after a mesh's triangles are in: none is an error; zero-area ones a warning.
-fn finish(
-    v: &Validator<'_>,
-    line: usize,
-    key: &str,
-    added: &[Triangle],
-    fail: &dyn Fn(String) -> SceneError,
-    warnings: &mut Vec<String>,
-) -> Result<(), SceneError> {
-    if added.is_empty() {
-        return Err(fail("no triangles: the mesh is empty".into()));
-    }
-    let degenerate = {
-        use rayon::prelude::*;
-        added
-            .par_iter()
-            .filter(|t| is_degenerate(&t.vertices))
-            .count()
-    };
-    if degenerate > 0 {
-        warnings.push(format!(
-            "{}:{line}: {key}: {degenerate} zero-area triangles (never hit)",
-            v.path.display()
-        ));
-    }
-    Ok(())
-}
-
-/// The warning for `n` faces of fewer than three vertices, the first on line `first`.
-fn short_face_warning(n: usize, first: usize) -> String {
+/// The warning for the faces of fewer than three vertices that a mesh dropped.
+fn short_face_warning(short: ShortFaces) -> String {
+    let ShortFaces { count: n, first } = short;
     format!(
         "{n} face(s) with fewer than three vertices dropped (line {first}{})",
         if n > 1 { " and others" } else { "" }
     )
 }
 
-/// Why an MTL's bytes are not an MTL text, as (line, message): not UTF-8, a NUL byte, or a
-/// line longer than `obj::MAX_LINE_BYTES`.
-fn mtl_junk(mtl: &[u8]) -> Option<(u32, String)> {
+/// Why an MTL's bytes are not an MTL text, at its line: not UTF-8, a NUL byte, or a line
+/// longer than `obj::MAX_LINE_BYTES`.
+fn mtl_junk(mtl: &[u8]) -> Option<ObjError> {
     if let Err(e) = std::str::from_utf8(mtl) {
         let line = super::error::line_of_bytes(mtl, e.valid_up_to()) as u32;
-        return Some((line, "not UTF-8".to_string()));
+        return Some(ObjError::NotUtf8 { line });
     }
     super::obj::junk(mtl, true)
 }
 
-/// The first line (1-based) of an MTL whose Ka, Kd, Ks or Ke has fewer than three
-/// values: tobj 4 panics on those, so they are refused before it sees them.
-fn short_colour_line(mtl: &[u8]) -> Option<usize> {
+/// The first line of an MTL whose Ka, Kd, Ks or Ke has fewer than three values: tobj 4
+/// panics on those, so they are refused before it sees them.
+fn short_colour(mtl: &[u8]) -> Option<ObjError> {
     let text = String::from_utf8_lossy(mtl);
     text.lines()
         .position(|l| {
             let mut words = l.split_whitespace();
             matches!(words.next(), Some("Ka" | "Kd" | "Ks" | "Ke")) && words.count() < 3
         })
-        .map(|k| k + 1)
+        .map(|k| ObjError::ShortColour { line: k as u32 + 1 })
 }
 
 /// What the cache holds for a mesh read by glint's own reader: its triangles as placed,
@@ -586,25 +849,24 @@ fn short_colour_line(mtl: &[u8]) -> Option<usize> {
 struct CachedMesh {
     vertices: Vec<[[f32; 3]; 3]>,
     normals: Option<Vec<[[f32; 3]; 3]>>,
-    short_faces: usize,
-    first_short_face: Option<usize>,
+    short_faces: Option<ShortFaces>,
 }
 
 impl CachedMesh {
-    fn load(key: &crate::cache::Key) -> Option<CachedMesh> {
-        let mut s = crate::cache::load("mesh", key)?.into_iter();
+    fn load(cache: &Cache, key: &Key) -> Option<CachedMesh> {
+        let mut s = cache.load("mesh", key)?.into_iter();
         let (vertices, normals, short) = (s.next()?, s.next()?, s.next()?);
-        let (short_faces, first) = (*short.first()? as usize, *short.get(1)? as usize);
+        let (count, first) = (*short.first()? as usize, *short.get(1)? as usize);
         Some(CachedMesh {
             vertices: crate::cache::section_as(vertices),
             normals: (!normals.is_empty()).then(|| crate::cache::section_as(normals)),
-            short_faces,
-            first_short_face: (short_faces > 0).then_some(first),
+            short_faces: (count > 0).then_some(ShortFaces { count, first }),
         })
     }
 
     fn store(
-        key: &crate::cache::Key,
+        cache: &Arc<Cache>,
+        key: &Key,
         placed: &[Triangle],
         normals: Option<&[[[f32; 3]; 3]]>,
         short_faces: &[usize],
@@ -623,13 +885,13 @@ impl CachedMesh {
         // The text's vertices are already a copy of their own: written on a thread of
         // their own where the program lets the cache write behind (`glint render` does),
         // while the scene is flattened and its BVH built.
-        crate::cache::store_owned("mesh", *key, vec![vertices, normals, short.to_vec()]);
+        cache.store_owned("mesh", *key, vec![vertices, normals, short.to_vec()]);
     }
 }
 
 /// The bytes of an OBJ file as read (`raw`), gunzipped (at most `limit` bytes) when the
 /// name ends in `.gz`.
-fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, String> {
+fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> {
     let _gunzip = Gunzip(std::time::Instant::now());
     if path.extension().is_some_and(|e| e == "gz") {
         use std::io::Read;
@@ -642,9 +904,7 @@ fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, String> {
         loop {
             let old = out.len();
             out.resize(old + GUNZIP_BLOCK, 0);
-            let n = dec
-                .read(&mut out[old..])
-                .map_err(|e| format!("cannot gunzip: {e}"))?;
+            let n = dec.read(&mut out[old..]).map_err(MeshError::Gunzip)?;
             out.truncate(old + n);
             if n == 0 {
                 break;
@@ -656,19 +916,15 @@ fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, String> {
                 None => out.len() - line_start > super::obj::MAX_LINE_BYTES,
             };
             if long || new.contains(&0) {
-                let (line, why) =
-                    super::obj::junk(&out, false).unwrap_or((1, "not an OBJ text".into()));
-                return Err(format!("line {line}: {why}"));
+                let why = super::obj::junk(&out, false).unwrap_or(ObjError::NotText { line: 1 });
+                return Err(MeshError::Obj(why));
             }
             if first_nl.is_some() {
                 line_start = old + 1 + new.iter().rposition(|&b| b == b'\n').unwrap_or(0);
             }
         }
         if out.len() as u64 > limit {
-            return Err(format!(
-                "unpacks to more than the input limit of {} MiB (set GLINT_MAX_INPUT_MIB to raise it)",
-                limit >> 20
-            ));
+            return Err(MeshError::Unpacked { limit });
         }
         return Ok(out);
     }
@@ -676,7 +932,7 @@ fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, String> {
 }
 
 /// What `obj::parse` returns.
-type ObjParse = Result<Option<Parsed>, String>;
+type ObjParse = Result<Option<Parsed>, ObjError>;
 
 /// The bytes of text `gunzip_parse` inflates before it hands them to a parse.
 const GUNZIP_PIECE: usize = 2 << 20;
@@ -754,9 +1010,9 @@ fn gunzip_parse(
                         .iter()
                         .map(|h| super::error::line_of_bytes(h, h.len()) - 1)
                         .sum();
-                    let (line, why) = super::obj::junk(&rest[..filled], false)
-                        .unwrap_or((1, "not an OBJ text".into()));
-                    junk = Some(format!("line {}: {why}", before as u32 + line));
+                    let why = super::obj::junk(&rest[..filled], false)
+                        .unwrap_or(ObjError::NotText { line: 1 });
+                    junk = Some(why.after(before as u32));
                     break;
                 } else {
                     searched = filled;
@@ -822,8 +1078,80 @@ impl Drop for Gunzip {
 
 #[cfg(test)]
 mod tests {
-    use super::{Normals, Transform, gunzip_parse};
-    use crate::scene::obj;
+    use super::{FaceError, MeshError, Normals, Transform, gunzip_parse};
+    use crate::scene::{ObjError, ReadError, Scene, SceneError, obj};
+    use std::path::Path;
+
+    /// A scene of one mesh `m.obj` (scaled by `scale` in x), read through `read`.
+    fn one_mesh(scale: &str, read: &crate::scene::ReadFile<'_>) -> Result<Scene, SceneError> {
+        let src = format!(
+            "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 45.0\n\
+             width = 4\nheight = 4\n[materials.m]\nmodel = \"ambient\"\nka = [1.0, 1.0, 1.0]\n\
+             [[meshes]]\nfile = \"m.obj\"\nmaterial = \"m\"\nscale = [{scale}, 1.0, 1.0]\n"
+        );
+        Scene::parse_with(&src, Path::new("s.toml"), read)
+    }
+
+    /// `one_mesh` with `obj` as the mesh's text.
+    fn with_obj(scale: &str, obj: &str) -> Result<Scene, SceneError> {
+        one_mesh(scale, &|_: &Path| Ok(obj.as_bytes().to_vec()))
+    }
+
+    /// The mesh error inside a scene error, which must name the entry's line and key.
+    fn mesh_error(e: &SceneError) -> &MeshError {
+        match e {
+            SceneError::Mesh {
+                line, key, error, ..
+            } => {
+                assert_eq!((*line, key.as_str()), (11, "meshes[0].file"), "{e}");
+                error
+            }
+            _ => panic!("not a mesh error: {e}"),
+        }
+    }
+
+    #[test]
+    fn mesh_errors_are_typed_and_print_file_line_key_and_the_meshs_line() {
+        let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        let e = with_obj("1.0", &format!("{tri}f 1 2 9\n")).unwrap_err();
+        assert!(matches!(
+            mesh_error(&e),
+            MeshError::Obj(ObjError::VertexIndex {
+                line: 4,
+                index: 9,
+                defined: 3
+            })
+        ));
+        assert_eq!(
+            e.to_string(),
+            "s.toml:11: meshes[0].file: mesh m.obj: line 4: face vertex index 9 is out of range (3 vertices defined before it)"
+        );
+        let e = with_obj("1e30", &format!("v 1e10 0 0\n{tri}f 1 2 3\nf 2 3 4\n")).unwrap_err();
+        assert!(matches!(
+            mesh_error(&e),
+            MeshError::Face {
+                face: 0,
+                why: FaceError::Overflow
+            }
+        ));
+        assert!(
+            e.to_string()
+                .ends_with("mesh m.obj: face 0: the transform overflows f32")
+        );
+        let e = one_mesh("1.0", &|_: &Path| Err(ReadError::Other("gone".into()))).unwrap_err();
+        assert!(matches!(
+            mesh_error(&e),
+            MeshError::Read(ReadError::Other(_))
+        ));
+        assert_eq!(e.to_string(), "s.toml:11: meshes[0].file: mesh m.obj: gone");
+        let e = with_obj("1.0", "# nothing\n").unwrap_err();
+        assert!(matches!(mesh_error(&e), MeshError::Empty));
+        // The twins: the same mesh with its faces in range, and a scale that keeps f32,
+        // loads.
+        let ok = with_obj("1e30", &format!("{tri}f 1 2 3\n")).unwrap();
+        assert_eq!(ok.triangles.len(), 1);
+        assert!(with_obj("1e20", &format!("v 1e10 0 0\n{tri}f 1 2 3\n")).is_ok());
+    }
 
     fn gz(bytes: &[u8]) -> Vec<u8> {
         use std::io::Write;
@@ -833,7 +1161,7 @@ mod tests {
     }
 
     /// `obj::parse`'s result (or error) as text, to compare whole results.
-    fn shown(r: &Result<Option<obj::Parsed>, String>) -> String {
+    fn shown(r: &Result<Option<obj::Parsed>, obj::ObjError>) -> String {
         format!("{r:?}")
     }
 

@@ -9,9 +9,12 @@ pub mod range;
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
+use std::sync::Arc;
 
 pub use error::{SceneError, line_of};
 use format::{SceneFile, Vec3File};
+pub use mesh::{FaceError, MeshError};
+pub use obj::ObjError;
 use toml::Spanned;
 
 /// The largest width or height accepted (the GPU renders larger frames in tiles).
@@ -240,11 +243,16 @@ pub struct Scene {
     /// Where the triangles came from, in order: (index of the first, `file:line: key`),
     /// one entry per `[[triangles]]` and per mesh.
     pub triangle_sources: Vec<(usize, String)>,
+    /// The cache the scene was loaded with ([`LoadOptions::cache`]), for the BVH build
+    /// ([`crate::buffers::SceneBuffers::new`]) to use too; `None` caches nothing. Scenes
+    /// compare equal only when they hold the same cache, or none (a cache equals only
+    /// itself: see [`crate::cache::Cache`]).
+    pub cache: Option<Arc<crate::cache::Cache>>,
 }
 
 /// How a scene is read: settings as values (the command line makes them from its flags and
 /// environment).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct LoadOptions {
     /// The most bytes read from one input file, and unpacked from one `.gz`
     /// ([`DEFAULT_MAX_INPUT_MIB`] MiB by default; `GLINT_MAX_INPUT_MIB` on the command
@@ -253,6 +261,10 @@ pub struct LoadOptions {
     /// Read only files below the scene's own folder (after following symbolic links); a
     /// mesh or MTL anywhere else is an error naming it.
     pub confine: bool,
+    /// Where large meshes as placed, and large scenes' BVHs, are cached (see
+    /// [`crate::cache`]); `None` (the default) caches nothing. The scene keeps it for its
+    /// BVH ([`Scene::cache`]).
+    pub cache: Option<Arc<crate::cache::Cache>>,
 }
 
 impl Default for LoadOptions {
@@ -260,6 +272,7 @@ impl Default for LoadOptions {
         LoadOptions {
             max_input_bytes: DEFAULT_MAX_INPUT_MIB << 20,
             confine: false,
+            cache: None,
         }
     }
 }
@@ -289,7 +302,7 @@ impl Scene {
         let text = read_scene_text(path, limit)?;
         if !options.confine {
             let read = move |p: &Path| read_from_disk_limited(p, limit);
-            return Scene::parse_limited(&text, path, &read, limit);
+            return Scene::parse_limited(&text, path, &read, options);
         }
         let root = path
             .parent()
@@ -300,7 +313,7 @@ impl Scene {
             error,
         })?;
         let read = confined_reader_limited(root, limit);
-        Scene::parse_limited(&text, path, &read, limit)
+        Scene::parse_limited(&text, path, &read, options)
     }
 
     /// Parses and validates scene text; `path` names it in errors and anchors mesh paths.
@@ -311,22 +324,24 @@ impl Scene {
     /// [`Scene::parse`], reading meshes and MTLs through `read` (a fuzzer or an embedder
     /// can serve them from memory).
     pub fn parse_with(src: &str, path: &Path, read: &ReadFile<'_>) -> Result<Scene, SceneError> {
-        Scene::parse_limited(src, path, read, LoadOptions::default().max_input_bytes)
+        Scene::parse_limited(src, path, read, &LoadOptions::default())
     }
 
-    /// [`Scene::parse_with`] with `limit` bytes unpacked at most from one `.gz` mesh.
+    /// [`Scene::parse_with`] with [`LoadOptions::max_input_bytes`] unpacked at most from one
+    /// `.gz` mesh, and [`LoadOptions::cache`]; `options.confine` is `read`'s to apply.
     fn parse_limited(
         src: &str,
         path: &Path,
         read: &ReadFile<'_>,
-        limit: u64,
+        options: &LoadOptions,
     ) -> Result<Scene, SceneError> {
         let file: SceneFile = toml::from_str(src).map_err(|e| syntax_error(src, path, &e))?;
         Validator {
             src,
             path,
             read,
-            limit,
+            limit: options.max_input_bytes,
+            cache: options.cache.as_ref(),
         }
         .scene(file)
     }
@@ -407,25 +422,27 @@ struct Validator<'a> {
     read: &'a ReadFile<'a>,
     /// The most bytes unpacked from one `.gz` mesh ([`LoadOptions::max_input_bytes`]).
     limit: u64,
+    /// [`LoadOptions::cache`].
+    cache: Option<&'a Arc<crate::cache::Cache>>,
 }
 
-/// How a scene reads the files it names (meshes and their MTLs): the bytes, or a message.
-pub type ReadFile<'a> = dyn Fn(&Path) -> Result<Vec<u8>, String> + 'a;
+/// How a scene reads the files it names (meshes and their MTLs): the bytes, or why not.
+pub type ReadFile<'a> = dyn Fn(&Path) -> Result<Vec<u8>, ReadError> + 'a;
 
 /// [`ReadFile`] from the file system: regular files only, at most the default input limit
 /// ([`LoadOptions`]).
-pub fn read_from_disk(path: &Path) -> Result<Vec<u8>, String> {
+pub fn read_from_disk(path: &Path) -> Result<Vec<u8>, ReadError> {
     read_from_disk_limited(path, LoadOptions::default().max_input_bytes)
 }
 
 /// [`read_from_disk`] with at most `limit` bytes.
-pub fn read_from_disk_limited(path: &Path, limit: u64) -> Result<Vec<u8>, String> {
-    read_limited(path, limit).map_err(|e| e.to_string())
+pub fn read_from_disk_limited(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+    read_limited(path, limit)
 }
 
 /// A [`ReadFile`] that reads only files whose real path (symbolic links followed) lies
 /// below `root`, which must itself be canonical; at most the default input limit.
-pub fn confined_reader(root: PathBuf) -> impl Fn(&Path) -> Result<Vec<u8>, String> {
+pub fn confined_reader(root: PathBuf) -> impl Fn(&Path) -> Result<Vec<u8>, ReadError> {
     confined_reader_limited(root, LoadOptions::default().max_input_bytes)
 }
 
@@ -433,15 +450,14 @@ pub fn confined_reader(root: PathBuf) -> impl Fn(&Path) -> Result<Vec<u8>, Strin
 pub fn confined_reader_limited(
     root: PathBuf,
     limit: u64,
-) -> impl Fn(&Path) -> Result<Vec<u8>, String> {
+) -> impl Fn(&Path) -> Result<Vec<u8>, ReadError> {
     move |path: &Path| {
-        let real = std::fs::canonicalize(path).map_err(|e| format!("cannot read: {e}"))?;
+        let real = std::fs::canonicalize(path).map_err(ReadError::Io)?;
         if !real.starts_with(&root) {
-            return Err(format!(
-                "{} is outside the scene's folder {} (--confine)",
-                real.display(),
-                root.display()
-            ));
+            return Err(ReadError::Outside {
+                path: real,
+                root: root.clone(),
+            });
         }
         read_from_disk_limited(&real, limit)
     }
@@ -467,6 +483,19 @@ pub enum ReadError {
         .0 >> 20
     )]
     TooLarge(u64),
+    /// In confined mode ([`LoadOptions::confine`]), a file whose real path is not below the
+    /// scene's folder.
+    #[error("{path} is outside the scene's folder {root} (--confine)")]
+    Outside {
+        /// The file's real path (symbolic links followed).
+        path: PathBuf,
+        /// The scene's folder, canonical.
+        root: PathBuf,
+    },
+    /// Any other reason a [`ReadFile`] gives, printed as it is (a reader that serves files
+    /// from memory has reasons of its own).
+    #[error("{0}")]
+    Other(String),
 }
 
 fn kind_of(t: std::fs::FileType) -> &'static str {
@@ -719,6 +748,7 @@ impl Validator<'_> {
             warnings,
             sphere_sources,
             triangle_sources,
+            cache: self.cache.cloned(),
         })
     }
 
@@ -936,5 +966,40 @@ impl Validator<'_> {
                 Ok(x)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{ReadError, confined_reader};
+
+    #[test]
+    fn a_confined_reader_refuses_what_is_outside_its_folder() {
+        let d = std::env::temp_dir().join(format!("glint-confine-unit-{}", std::process::id()));
+        let inside = d.join("in");
+        std::fs::create_dir_all(&inside).unwrap();
+        std::fs::write(d.join("out.obj"), "v 0 0 0\n").unwrap();
+        std::fs::write(inside.join("in.obj"), "v 0 0 0\n").unwrap();
+        let root = std::fs::canonicalize(&inside).unwrap();
+        let read = confined_reader(root.clone());
+        let e = read(&inside.join("../out.obj")).unwrap_err();
+        let out = std::fs::canonicalize(d.join("out.obj")).unwrap();
+        assert!(
+            matches!(&e, ReadError::Outside { path, root: r } if *path == out && *r == root),
+            "{e:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "{} is outside the scene's folder {} (--confine)",
+                out.display(),
+                root.display()
+            )
+        );
+        // The twin: the file inside is read; one missing is an I/O error.
+        assert_eq!(read(&inside.join("in.obj")).unwrap(), b"v 0 0 0\n");
+        let e = read(&inside.join("missing.obj")).unwrap_err();
+        assert!(matches!(e, ReadError::Io(_)) && e.to_string().starts_with("cannot read: "));
+        let _ = std::fs::remove_dir_all(&d);
     }
 }

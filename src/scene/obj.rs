@@ -34,22 +34,169 @@ pub const NO_NORMAL: u32 = u32::MAX;
 /// only cost time and memory before the same verdict.
 pub const MAX_LINE_BYTES: usize = 1 << 20;
 
+/// What is wrong with an OBJ or MTL text, at its own line (from 1). Each message starts
+/// with "line N: ".
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ObjError {
+    /// A NUL byte: not a text file.
+    #[error("line {line}: a NUL byte: this is not a text file")]
+    Nul {
+        /// The line of the first NUL.
+        line: u32,
+    },
+    /// A line longer than 1 MiB (`MAX_LINE_BYTES`): not a text file.
+    #[error(
+        "line {line}: a line longer than {} MiB: this is not an OBJ or MTL text",
+        MAX_LINE_BYTES >> 20
+    )]
+    LongLine {
+        /// The long line.
+        line: u32,
+    },
+    /// Text that cannot be an OBJ, where no more precise reason was found.
+    #[error("line {line}: not an OBJ text")]
+    NotText {
+        /// Where it was noticed.
+        line: u32,
+    },
+    /// Bytes that are not UTF-8 (an MTL).
+    #[error("line {line}: not UTF-8")]
+    NotUtf8 {
+        /// The line of the first such byte.
+        line: u32,
+    },
+    /// A `v` without three numbers.
+    #[error("line {line}: a vertex (`v`) needs three numbers: {text:?}")]
+    Vertex {
+        /// The line.
+        line: u32,
+        /// The line's first 60 characters.
+        text: String,
+    },
+    /// A `vn` without three finite numbers.
+    #[error("line {line}: a normal (`vn`) needs three finite numbers: {text:?}")]
+    Normal {
+        /// The line.
+        line: u32,
+        /// The line's first 60 characters.
+        text: String,
+    },
+    /// A `vn` of zero length.
+    #[error("line {line}: a normal (`vn`) has zero length: {text:?}")]
+    ZeroNormal {
+        /// The line.
+        line: u32,
+        /// The line's first 60 characters.
+        text: String,
+    },
+    /// A face corner whose position index is not an integer.
+    #[error("line {line}: face vertex {word:?} is not an index")]
+    FaceVertex {
+        /// The line.
+        line: u32,
+        /// The corner as written (`v`, `v/t`, `v//n`, `v/t/n`).
+        word: String,
+    },
+    /// A face corner whose normal index is not an integer.
+    #[error("line {line}: face normal index in {word:?} is not an index")]
+    FaceNormal {
+        /// The line.
+        line: u32,
+        /// The corner as written.
+        word: String,
+    },
+    /// A face's position index names no position defined before it.
+    #[error(
+        "line {line}: face vertex index {index} is out of range ({defined} vertices defined before it)"
+    )]
+    VertexIndex {
+        /// The line.
+        line: u32,
+        /// The index as written (1-based, or negative: from the end).
+        index: i64,
+        /// The positions defined before the face.
+        defined: i64,
+    },
+    /// A face's normal index names no normal defined before it.
+    #[error(
+        "line {line}: face normal index {index} is out of range ({defined} normals (`vn`) defined before it)"
+    )]
+    NormalIndex {
+        /// The line.
+        line: u32,
+        /// The index as written.
+        index: i64,
+        /// The normals defined before the face.
+        defined: i64,
+    },
+    /// An MTL colour (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three values (tobj 4 panics
+    /// on those).
+    #[error("line {line}: a colour (Ka, Kd, Ks, Ke) needs three numbers")]
+    ShortColour {
+        /// The line.
+        line: u32,
+    },
+}
+
+impl ObjError {
+    /// The line (from 1) of the file the error is at.
+    pub fn line(&self) -> u32 {
+        match *self {
+            ObjError::Nul { line }
+            | ObjError::LongLine { line }
+            | ObjError::NotText { line }
+            | ObjError::NotUtf8 { line }
+            | ObjError::Vertex { line, .. }
+            | ObjError::Normal { line, .. }
+            | ObjError::ZeroNormal { line, .. }
+            | ObjError::FaceVertex { line, .. }
+            | ObjError::FaceNormal { line, .. }
+            | ObjError::VertexIndex { line, .. }
+            | ObjError::NormalIndex { line, .. }
+            | ObjError::ShortColour { line } => line,
+        }
+    }
+
+    fn line_mut(&mut self) -> &mut u32 {
+        match self {
+            ObjError::Nul { line }
+            | ObjError::LongLine { line }
+            | ObjError::NotText { line }
+            | ObjError::NotUtf8 { line }
+            | ObjError::Vertex { line, .. }
+            | ObjError::Normal { line, .. }
+            | ObjError::ZeroNormal { line, .. }
+            | ObjError::FaceVertex { line, .. }
+            | ObjError::FaceNormal { line, .. }
+            | ObjError::VertexIndex { line, .. }
+            | ObjError::NormalIndex { line, .. }
+            | ObjError::ShortColour { line } => line,
+        }
+    }
+
+    /// The error of a piece of text, moved to the whole file's lines: its line plus
+    /// `before`, the lines that come before the piece.
+    pub(super) fn after(mut self, before: u32) -> ObjError {
+        *self.line_mut() += before;
+        self
+    }
+}
+
 /// The line (from 1) of byte `pos` of `bytes`.
 fn line_at(bytes: &[u8], pos: usize) -> u32 {
     super::error::line_of_bytes(bytes, pos) as u32
 }
 
 /// Why `bytes`, all or the start of an OBJ or MTL text, is not one: a NUL byte, or a line
-/// longer than [`MAX_LINE_BYTES`] (where `whole`, the last line counts as ended), as (line
-/// from 1, message). `None` when neither is seen. One pass over the bytes, only to find
-/// the line of what it found.
-pub fn junk(bytes: &[u8], whole: bool) -> Option<(u32, String)> {
+/// longer than [`MAX_LINE_BYTES`] (where `whole`, the last line counts as ended), at its
+/// line. `None` when neither is seen. One pass over the bytes, only to find the line of
+/// what it found.
+pub fn junk(bytes: &[u8], whole: bool) -> Option<ObjError> {
     if bytes.contains(&0) {
         let at = bytes.iter().position(|&b| b == 0).unwrap_or(0);
-        return Some((
-            line_at(bytes, at),
-            "a NUL byte: this is not a text file".to_string(),
-        ));
+        return Some(ObjError::Nul {
+            line: line_at(bytes, at),
+        });
     }
     let mut start = 0;
     for end in bytes
@@ -60,21 +207,18 @@ pub fn junk(bytes: &[u8], whole: bool) -> Option<(u32, String)> {
         .chain(whole.then_some(bytes.len()))
     {
         if end - start > MAX_LINE_BYTES {
-            return Some((line_at(bytes, start), too_long()));
+            return Some(ObjError::LongLine {
+                line: line_at(bytes, start),
+            });
         }
         start = end + 1;
     }
     if !whole && bytes.len().saturating_sub(start) > MAX_LINE_BYTES {
-        return Some((line_at(bytes, start), too_long()));
+        return Some(ObjError::LongLine {
+            line: line_at(bytes, start),
+        });
     }
     None
-}
-
-fn too_long() -> String {
-    format!(
-        "a line longer than {} MiB: this is not an OBJ or MTL text",
-        MAX_LINE_BYTES >> 20
-    )
 }
 
 /// Whether a reader takes the normals (`vn` and the faces' third indices): only a smooth
@@ -109,8 +253,8 @@ struct Chunk {
 }
 
 /// Parses `text`: `Ok(None)` when it needs tobj (materials or statements this reader does
-/// not know), `Err` with the line for a malformed position, normal or face.
-pub fn parse(text: &str, normals: Normals) -> Result<Option<Parsed>, String> {
+/// not know), `Err` at its line for a malformed position, normal or face.
+pub fn parse(text: &str, normals: Normals) -> Result<Option<Parsed>, ObjError> {
     parse_with(text, true, normals)
 }
 
@@ -120,13 +264,13 @@ pub fn parse(text: &str, normals: Normals) -> Result<Option<Parsed>, String> {
 /// triangles in tobj's order (file order, polygons fanned from their first vertex), and
 /// with `short_faces` the lines of faces with fewer than three vertices, which tobj drops
 /// in silence.
-pub fn check(text: &str, normals: Normals) -> Result<Parsed, String> {
+pub fn check(text: &str, normals: Normals) -> Result<Parsed, ObjError> {
     Ok(parse_with(text, false, normals)?.expect("a lenient parse always finishes"))
 }
 
 /// [`parse`]; with `strict` false, unknown statements are skipped instead of handing the
 /// file to tobj.
-fn parse_with(text: &str, strict: bool, normals: Normals) -> Result<Option<Parsed>, String> {
+fn parse_with(text: &str, strict: bool, normals: Normals) -> Result<Option<Parsed>, ObjError> {
     let bytes = text.as_bytes();
     let pieces = rayon::current_num_threads().max(1) * 4;
     let mut cuts = vec![0usize];
@@ -142,7 +286,7 @@ fn parse_with(text: &str, strict: bool, normals: Normals) -> Result<Option<Parse
         }
     }
     cuts.push(bytes.len());
-    let chunks: Vec<Result<Option<Chunk>, (u32, String)>> = cuts
+    let chunks: Vec<Result<Option<Chunk>, ObjError>> = cuts
         .par_windows(2)
         .map(|w| parse_chunk(&text[w[0]..w[1]], strict, normals))
         .collect();
@@ -152,7 +296,7 @@ fn parse_with(text: &str, strict: bool, normals: Normals) -> Result<Option<Parse
 /// One piece of an OBJ's text, whole lines, parsed as [`parse`] parses it: pieces given to
 /// [`join_pieces`] in file order give what [`parse`] gives for their text joined, wherever
 /// the file was cut (at line ends). This lets a file be parsed as it arrives (a gunzip).
-pub struct Piece(Result<Option<Chunk>, (u32, String)>);
+pub struct Piece(Result<Option<Chunk>, ObjError>);
 
 /// Parses one piece of whole lines (its last line may lack its `\n` only at the file's end).
 pub fn parse_piece(text: &str, normals: Normals) -> Piece {
@@ -160,15 +304,15 @@ pub fn parse_piece(text: &str, normals: Normals) -> Piece {
 }
 
 /// [`parse`]'s result for the text of `pieces` (in file order) joined.
-pub fn join_pieces(pieces: Vec<Piece>, normals: Normals) -> Result<Option<Parsed>, String> {
+pub fn join_pieces(pieces: Vec<Piece>, normals: Normals) -> Result<Option<Parsed>, ObjError> {
     join(pieces.into_iter().map(|p| p.0).collect(), normals)
 }
 
 /// The chunks of a text (whole lines each, in file order) joined into what [`parse`] gives.
 fn join(
-    chunks: Vec<Result<Option<Chunk>, (u32, String)>>,
+    chunks: Vec<Result<Option<Chunk>, ObjError>>,
     normals: Normals,
-) -> Result<Option<Parsed>, String> {
+) -> Result<Option<Parsed>, ObjError> {
     // Line and vertex offsets of each chunk; the first error in file order wins.
     let mut done = Vec::with_capacity(chunks.len());
     let (mut line0, mut v0, mut n0) = (0u32, 0usize, 0usize);
@@ -182,7 +326,7 @@ fn join(
                 done.push((c, offsets));
             }
             Ok(None) => return Ok(None),
-            Err((line, e)) => return Err(format!("line {}: {e}", line0 + line)),
+            Err(e) => return Err(e.after(line0)),
         }
     }
     let vertices: Vec<[f32; 3]> = done
@@ -202,32 +346,29 @@ fn join(
         let defined = v0 as i64 + *before as i64;
         let mut out = [0u32; 3];
         for (slot, &i) in out.iter_mut().zip(ix) {
-            *slot = index(i, defined).ok_or_else(|| {
-                format!(
-                    "line {}: face vertex index {i} is out of range ({defined} vertices defined before it)",
-                    l0 + line
-                )
+            *slot = index(i, defined).ok_or(ObjError::VertexIndex {
+                line: l0 + line,
+                index: i,
+                defined,
             })?;
         }
         Ok(out)
     };
-    let resolve_normals = |(nix, nbefore): &RawNormals,
-                           line: u32,
-                           (l0, _, n0): (u32, usize, usize)| {
-        let n_defined = n0 as i64 + *nbefore as i64;
-        let mut nout = [NO_NORMAL; 3];
-        for (slot, &i) in nout.iter_mut().zip(nix) {
-            if i != 0 {
-                *slot = index(i, n_defined).ok_or_else(|| {
-                    format!(
-                        "line {}: face normal index {i} is out of range ({n_defined} normals (`vn`) defined before it)",
-                        l0 + line
-                    )
-                })?;
+    let resolve_normals =
+        |(nix, nbefore): &RawNormals, line: u32, (l0, _, n0): (u32, usize, usize)| {
+            let n_defined = n0 as i64 + *nbefore as i64;
+            let mut nout = [NO_NORMAL; 3];
+            for (slot, &i) in nout.iter_mut().zip(nix) {
+                if i != 0 {
+                    *slot = index(i, n_defined).ok_or(ObjError::NormalIndex {
+                        line: l0 + line,
+                        index: i,
+                        defined: n_defined,
+                    })?;
+                }
             }
-        }
-        Ok(nout)
-    };
+            Ok(nout)
+        };
     // Each chunk resolves its faces straight into its own stretch of the result, in
     // parallel: no per-chunk vectors to join afterwards. The first error in file order wins.
     let total: usize = done.iter().map(|(c, _)| c.faces.len()).sum();
@@ -253,7 +394,7 @@ fn join(
             };
             jobs.push((c, *off, t, n));
         }
-        let errors: Vec<Option<String>> = jobs
+        let errors: Vec<Option<ObjError>> = jobs
             .into_par_iter()
             .map(|(c, off, t, n)| {
                 // Face by face, its positions before its normals, as errors are ordered.
@@ -263,7 +404,7 @@ fn join(
                         *slot = resolve_normals(raw, f.2, off).map_err(Some)?;
                     }
                 }
-                Ok::<(), Option<String>>(())
+                Ok::<(), Option<ObjError>>(())
             })
             .map(|r| r.err().flatten())
             .collect();
@@ -305,9 +446,9 @@ fn lines(text: &str) -> impl Iterator<Item = &str> {
 }
 
 /// One chunk of whole lines. Lines are counted from 1 within the chunk.
-fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chunk>, (u32, String)> {
+fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chunk>, ObjError> {
     if text.as_bytes().contains(&0) {
-        return Err(junk(text.as_bytes(), true).unwrap_or((1, String::new())));
+        return Err(junk(text.as_bytes(), true).unwrap_or(ObjError::Nul { line: 1 }));
     }
     let mut c = Chunk::default();
     let mut face: Vec<i64> = Vec::with_capacity(8);
@@ -315,7 +456,7 @@ fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chun
     for line in lines(text) {
         c.lines += 1;
         if line.len() > MAX_LINE_BYTES {
-            return Err((c.lines, too_long()));
+            return Err(ObjError::LongLine { line: c.lines });
         }
         let mut words = line.split_ascii_whitespace();
         let Some(kw) = words.next() else { continue };
@@ -326,10 +467,10 @@ fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chun
                     match words.next().map(str::parse::<f32>) {
                         Some(Ok(x)) => *slot = x,
                         _ => {
-                            return Err((
-                                c.lines,
-                                format!("a vertex (`v`) needs three numbers: {:?}", trunc(line)),
-                            ));
+                            return Err(ObjError::Vertex {
+                                line: c.lines,
+                                text: trunc(line).to_string(),
+                            });
                         }
                     }
                 }
@@ -341,22 +482,19 @@ fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chun
                     match words.next().map(str::parse::<f32>) {
                         Some(Ok(x)) if x.is_finite() => *slot = x,
                         _ => {
-                            return Err((
-                                c.lines,
-                                format!(
-                                    "a normal (`vn`) needs three finite numbers: {:?}",
-                                    trunc(line)
-                                ),
-                            ));
+                            return Err(ObjError::Normal {
+                                line: c.lines,
+                                text: trunc(line).to_string(),
+                            });
                         }
                     }
                 }
                 let len2 = n.iter().map(|&x| x as f64 * x as f64).sum::<f64>();
                 if len2 <= 0.0 {
-                    return Err((
-                        c.lines,
-                        format!("a normal (`vn`) has zero length: {:?}", trunc(line)),
-                    ));
+                    return Err(ObjError::ZeroNormal {
+                        line: c.lines,
+                        text: trunc(line).to_string(),
+                    });
                 }
                 c.normals.push(n);
             }
@@ -368,19 +506,18 @@ fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chun
                     // by a byte loop (most words have no slash; `split('/')` cost more).
                     let slash = w.bytes().position(|b| b == b'/');
                     let first = &w[..slash.unwrap_or(w.len())];
-                    let ix: i64 = first
-                        .parse()
-                        .map_err(|_| (c.lines, format!("face vertex {w:?} is not an index")))?;
+                    let ix: i64 = first.parse().map_err(|_| ObjError::FaceVertex {
+                        line: c.lines,
+                        word: w.to_string(),
+                    })?;
                     face.push(ix);
                     if normals == Normals::Read {
                         // The third part, after the texture index.
                         let n = match slash.and_then(|k| w[k + 1..].split('/').nth(1)) {
                             None | Some("") => 0,
-                            Some(n) => n.parse().map_err(|_| {
-                                (
-                                    c.lines,
-                                    format!("face normal index in {w:?} is not an index"),
-                                )
+                            Some(n) => n.parse().map_err(|_| ObjError::FaceNormal {
+                                line: c.lines,
+                                word: w.to_string(),
                             })?,
                         };
                         face_n.push(n);
@@ -499,19 +636,24 @@ mod tests {
                 .unwrap()
                 .is_none()
         );
-        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", Normals::Skip).unwrap_err();
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", Normals::Skip)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.starts_with("line 4: face vertex index 4 is out of range"),
             "{e}"
         );
-        let e = parse("v 0 0 0\nv 1 nope 0\n", Normals::Skip).unwrap_err();
+        let e = parse("v 0 0 0\nv 1 nope 0\n", Normals::Skip)
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("line 2: a vertex"), "{e}");
         // What tobj reads is checked the same way, its other statements skipped.
         let e = check(
             "mtllib a.mtl\nv 0 0 0\nv 1 0 0\nusemtl x\nv 0 1 0\nf 1 2 5\n",
             Normals::Skip,
         )
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(
             e.starts_with("line 6: face vertex index 5 is out of range"),
             "{e}"
@@ -545,12 +687,16 @@ mod tests {
                 .normals
                 .is_empty()
         );
-        let e = parse("v 0 0 0\nvn 0 0 0\n", Normals::Read).unwrap_err();
+        let e = parse("v 0 0 0\nvn 0 0 0\n", Normals::Read)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.starts_with("line 2: a normal (`vn`) has zero length"),
             "{e}"
         );
-        let e = parse("v 0 0 0\nvn 0 nan 1\n", Normals::Read).unwrap_err();
+        let e = parse("v 0 0 0\nvn 0 nan 1\n", Normals::Read)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.starts_with("line 2: a normal (`vn`) needs three finite"),
             "{e}"
@@ -559,13 +705,59 @@ mod tests {
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//2\n",
             Normals::Read,
         )
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(
             e.starts_with("line 5: face normal index 2 is out of range (1 normals"),
             "{e}"
         );
         // A flat mesh's normals are not looked at: today's files keep loading.
         assert!(parse("v 0 0 0\nvn 0 0 0\n", Normals::Skip).is_ok());
+    }
+
+    #[test]
+    fn errors_are_typed_with_their_line_and_print_as_before() {
+        let e = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", Normals::Skip).unwrap_err();
+        assert_eq!(
+            e,
+            ObjError::VertexIndex {
+                line: 4,
+                index: -4,
+                defined: 3
+            }
+        );
+        assert_eq!(e.line(), 4);
+        assert_eq!(
+            e.to_string(),
+            "line 4: face vertex index -4 is out of range (3 vertices defined before it)"
+        );
+        // The twin: one index less is in range, and the file is read.
+        assert!(parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -3\n", Normals::Skip).is_ok());
+        let e = parse("v 0 0 0\nf 1 2 x/1\n", Normals::Skip).unwrap_err();
+        assert_eq!(e.to_string(), "line 2: face vertex \"x/1\" is not an index");
+        assert_eq!(e.clone().after(10).line(), 12);
+        let nul = junk(b"v 0 0 0\nv 1\0 0 0\n", true).unwrap();
+        assert_eq!(nul, ObjError::Nul { line: 2 });
+        assert_eq!(
+            nul.to_string(),
+            "line 2: a NUL byte: this is not a text file"
+        );
+        assert_eq!(
+            junk(b"v 0 0 0\nv 1 0 0\n", true),
+            None,
+            "the twin: text is no junk"
+        );
+        let long = "#".repeat(MAX_LINE_BYTES + 1);
+        let e = junk(format!("v 0 0 0\n{long}").as_bytes(), true).unwrap();
+        assert_eq!(
+            e.to_string(),
+            "line 2: a line longer than 1 MiB: this is not an OBJ or MTL text"
+        );
+        assert_eq!(
+            junk(&long.as_bytes()[1..], true),
+            None,
+            "one byte less is a line"
+        );
     }
 
     #[test]
@@ -576,7 +768,7 @@ mod tests {
             s += &format!("v {k} 0 0\nv {k} 1 0\nv {k} 0 1\nf -3 -2 -1\n");
         }
         s += "f 1 2 999999\n";
-        let e = parse(&s, Normals::Skip).unwrap_err();
+        let e = parse(&s, Normals::Skip).unwrap_err().to_string();
         assert!(e.starts_with("line 80001: "), "{e}");
         let ok = &s[..s.len() - "f 1 2 999999\n".len()];
         same_as_tobj(ok);
