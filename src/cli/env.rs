@@ -36,7 +36,8 @@ fn private_runtime_dir() -> Option<std::path::PathBuf> {
 }
 
 /// The GPU settings for `--adapter NAME`, with what the environment adds, read here once:
-/// `GLINT_MAX_BUFFER_BYTES` (a smaller GPU's buffer limit) and `GLINT_TRAVERSAL=ray`.
+/// `GLINT_MAX_BUFFER_BYTES` (a smaller GPU's buffer limit), `GLINT_TRAVERSAL=ray` and
+/// `GLINT_PACKET_SHADOWS=0|1`.
 pub fn gpu_options(adapter: Option<&str>) -> glint::gpu::GpuOptions {
     glint::gpu::GpuOptions {
         adapter: adapter.map(str::to_string),
@@ -44,6 +45,11 @@ pub fn gpu_options(adapter: Option<&str>) -> glint::gpu::GpuOptions {
             .ok()
             .and_then(|v| v.trim().parse::<u64>().ok()),
         per_ray_traversal: std::env::var("GLINT_TRAVERSAL").as_deref() == Ok("ray"),
+        packet_shadows: match std::env::var("GLINT_PACKET_SHADOWS").as_deref() {
+            Ok("0") => Some(false),
+            Ok("1") => Some(true),
+            _ => None,
+        },
     }
 }
 

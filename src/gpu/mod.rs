@@ -103,6 +103,8 @@ pub struct Gpu {
     pub kernel: Kernel,
     /// The per-ray traversal only ([`GpuOptions::per_ray_traversal`]).
     per_ray_traversal: bool,
+    /// Shadow rays in packets, where not the adapter's choice ([`GpuOptions::packet_shadows`]).
+    packet_shadows: Option<bool>,
     /// The packet traversal's kernel, made on first use ([`Gpu::packet_kernel`]).
     packet: OnceLock<Result<Option<Kernel>, GpuError>>,
     /// The ray-query tracer's kernel, made on first use ([`Gpu::ray_query_kernel`]).
@@ -169,6 +171,10 @@ pub struct GpuOptions {
     /// The per-ray BVH traversal even where the device has subgroups for the packet one
     /// (`GLINT_TRAVERSAL=ray` on the command line). The same image either way.
     pub per_ray_traversal: bool,
+    /// In the packet traversal, whether shadow rays go in packets too: `None` for the
+    /// adapter's measured choice ([`packet_shadows_pay`]), else as given
+    /// (`GLINT_PACKET_SHADOWS=0|1` on the command line). The same image either way.
+    pub packet_shadows: Option<bool>,
 }
 
 impl GpuOptions {
@@ -270,6 +276,7 @@ impl Gpu {
         Ok(Gpu {
             start_time,
             per_ray_traversal: options.per_ray_traversal,
+            packet_shadows: options.packet_shadows,
             ..Gpu::from_device(info, device, queue)?
         })
     }
@@ -288,6 +295,7 @@ impl Gpu {
             queue,
             kernel,
             per_ray_traversal: false,
+            packet_shadows: None,
             packet: OnceLock::new(),
             ray_query: OnceLock::new(),
             start_time: Duration::ZERO,
@@ -317,7 +325,10 @@ impl Gpu {
                 if self.device.features().contains(wgpu::Features::SUBGROUP)
                     && !self.per_ray_traversal
                 {
-                    Kernel::new_packet_with(&self.device, packet_shadows_pay(&self.info)).map(Some)
+                    let shadows = self
+                        .packet_shadows
+                        .unwrap_or_else(|| packet_shadows_pay(&self.info));
+                    Kernel::new_packet_with(&self.device, shadows).map(Some)
                 } else {
                     Ok(None)
                 }

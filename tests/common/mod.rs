@@ -250,9 +250,9 @@ use glint::scene::{Scene, TriangleAlgorithm};
 /// The five seed scenes.
 pub const SEED_SCENES: [&str; 5] = ["sphere", "triangle", "umbrella", "bb8", "mitsubishi"];
 
-/// Every scene in `scenes/` that needs no fetched mesh: the seed scenes and their shadowed
-/// variants (the README shows each).
-pub const SHIPPED_SCENES: [&str; 8] = [
+/// Every scene in `scenes/` that needs no fetched mesh: the seed scenes, their shadowed,
+/// antialiased and mirrored variants and the Whitted scene (the README shows each).
+pub const SHIPPED_SCENES: [&str; 10] = [
     "sphere",
     "triangle",
     "umbrella",
@@ -261,6 +261,8 @@ pub const SHIPPED_SCENES: [&str; 8] = [
     "bb8-shadows",
     "mitsubishi-shadows",
     "bb8-aa",
+    "whitted",
+    "bb8-mirror",
 ];
 
 /// Loads `scenes/NAME.toml` from the crate root.
