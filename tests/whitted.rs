@@ -32,10 +32,12 @@ fn wall_z(z: f32, m: &str) -> String {
 }
 
 /// Two facing ambient mirrors with ka = kr = ½ under Ia = 1, the camera between them on
-/// their axis: the centre pixel is 1 − ½^(D+1) exactly, for max_depth D.
+/// their axis: the centre pixel is 1 − ½^(D+1) exactly, for max_depth D. Watertight, so
+/// that the rays along the diagonal the two triangles of each wall share hit on every
+/// adapter (a GPU's division may let Möller–Trumbore's through).
 fn hall(depth: u32, min_weight: f32) -> Scene {
     parse(&format!(
-        "ambient = [1.0, 1.0, 1.0]\nmax_depth = {depth}\nmin_weight = {min_weight:?}\n\
+        "ambient = [1.0, 1.0, 1.0]\ntriangle = \"watertight\"\nmax_depth = {depth}\nmin_weight = {min_weight:?}\n\
          [camera]\neye = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]\nfov = 30.0\nwidth = 9\nheight = 9\n\
          [materials.m]\nmodel = \"ambient\"\nka = [0.5, 0.5, 0.5]\nkr = [0.5, 0.5, 0.5]\n{}{}",
         wall_z(-1.0, "m"),

@@ -129,6 +129,18 @@ pub fn packet_shadows_pay(info: &wgpu::AdapterInfo) -> bool {
     }
 }
 
+/// Whether the packet traversal (one packet per subgroup) pays on this adapter: on CPU
+/// Vulkan implementations, where it was measured against the per-ray traversal
+/// (`docs/bench/ab.md`: lavapipe 25, peers 1M 0.70 with shadows), yes; on GPUs, no. On an
+/// NVIDIA H200 (driver 580.159.04, 2026-12-04, `glint bench`, 1024×768, median of 5) the
+/// per-ray traversal was faster or level on every scene measured: whitted 2.1 ms against
+/// 8.2, peers 1M with shadows 225 against 322, peers 100k with shadows 24.7 against 32.8,
+/// the dragon 4.5 against 5.2, bb8 with shadows 1.6 against 1.9, peers 1M without shadows
+/// 2.4 against 2.5 (`docs/bench/gpu-h200.md`).
+pub fn packet_traversal_pays(info: &wgpu::AdapterInfo) -> bool {
+    info.device_type == wgpu::DeviceType::Cpu
+}
+
 /// (major, minor) of the first "Mesa X.Y" in a driver string, as lavapipe reports it
 /// ("Mesa 22.3.6 (LLVM 15.0.6)", "Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)").
 pub fn mesa_version(driver_info: &str) -> Option<(u32, u32)> {
@@ -316,13 +328,15 @@ impl Gpu {
         })
     }
 
-    /// The packet traversal's kernel where the device has subgroups and the options did
-    /// not ask for the per-ray traversal, else `None`; its shader module is made on the first call, so a
-    /// process that never traverses a BVH on the GPU does not pay for it.
+    /// The packet traversal's kernel where the device has subgroups, the traversal pays on
+    /// it ([`packet_traversal_pays`]) and the options did not ask for the per-ray traversal,
+    /// else `None`; its shader module is made on the first call, so a process that never
+    /// traverses a BVH on the GPU does not pay for it.
     pub fn packet_kernel(&self) -> Result<Option<&Kernel>, GpuError> {
         self.packet
             .get_or_init(|| {
                 if self.device.features().contains(wgpu::Features::SUBGROUP)
+                    && packet_traversal_pays(&self.info)
                     && !self.per_ray_traversal
                 {
                     let shadows = self

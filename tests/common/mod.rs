@@ -314,14 +314,16 @@ pub fn render_gpu_rgba8(
 }
 
 /// The agreement GPU and CPU images must reach: on lavapipe every f32 bit of every pixel
-/// and every hit/miss; on other adapters (whose `dot`, `normalize` and fusing differ) at
-/// most 0.1% of pixels off by at most 1/255, and 0.01% hit/miss disagreements.
+/// and every hit/miss; on other adapters, whose division and square root Vulkan lets round
+/// within a few ULP, at most 0.1% of pixels off in 8 bits and 0.01% hit/miss disagreements.
+/// A pixel may be off by more than 1/255 there: a shadow ray or a reflection that grazes an
+/// edge can go the other way (NVIDIA H200: 2 of 307,200 bb8 pixels with the naive test).
 pub fn check_agreement(gpu_img: &Image, cpu_img: &Image, lavapipe: bool) -> Result<Diff, String> {
     let d = diff(gpu_img, cpu_img);
     let ok = if lavapipe {
         d.bit_exact()
     } else {
-        d.differing_pixels * 1000 <= d.pixels && d.max_u8 <= 1 && d.hit_miss * 10_000 <= d.pixels
+        d.differing_pixels * 1000 <= d.pixels && d.hit_miss * 10_000 <= d.pixels
     };
     if ok {
         Ok(d)
@@ -440,11 +442,16 @@ pub fn query_both(
                 "{what}: {bad} of {} GPU query results differ from the CPU's",
                 rays.len()
             );
-        } else {
+        } else if spec.triangle_algo == buffers::TRIANGLE_WATERTIGHT {
+            // The watertight test decides a hit with +, − and × alone, which every Vulkan
+            // device rounds as Rust does; the naive and Möller–Trumbore tests divide, which
+            // Vulkan lets round within 2.5 ULP, so they may flip at a shared edge or vertex.
             assert_eq!(
                 hit_miss, 0,
                 "{what}: {hit_miss} hit/miss disagreements between GPU and CPU"
             );
+        } else {
+            eprintln!("{what}: {hit_miss} hit/miss disagreements between GPU and CPU (division)");
         }
     }
     cpu
