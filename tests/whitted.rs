@@ -578,3 +578,63 @@ fn bad_optics_name_file_line_and_key() {
     assert_eq!(good.max_depth, 16);
     assert!(good.materials[0].optics.fresnel);
 }
+
+/// A smooth mirror whose vertex normals lean far from its plane: a ray that grazes it
+/// would reflect, about the shading normal, under the surface; glint mirrors that
+/// direction about the geometric plane, so it leaves above. The twin: the reflection about
+/// the shading normal alone does dip under (the case is real), and a flat copy of the same
+/// mirror reflects about the plane as usual.
+#[test]
+fn smooth_mirrors_never_reflect_under_the_surface() {
+    let d = common::Scratch::new("whitted-smooth");
+    // The plane y = 0 (geometric normal +y), vertex normals leaning 60° towards −x.
+    let (s, c) = 60f32.to_radians().sin_cos();
+    std::fs::write(
+        d.join("tilt.obj"),
+        format!(
+            "v -5 0 -5\nv 5 0 -5\nv 0 0 5\nvn {:?} {c:?} 0\nvn {:?} {c:?} 0\nvn {:?} {c:?} 0\nf 1//1 3//3 2//2\n",
+            -s, -s, -s
+        ),
+    )
+    .unwrap();
+    let scene = |smooth: bool| {
+        let path = d.join(format!("s{smooth}.toml"));
+        std::fs::write(
+            &path,
+            format!(
+                "max_depth = 1\nmin_weight = 0.0\n[camera]\neye = [0.0, 3.0, 9.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+                 fov = 40.0\nwidth = 8\nheight = 8\n[materials.m]\nmodel = \"ambient\"\nka = [0.1, 0.1, 0.1]\n\
+                 kr = [1.0, 1.0, 1.0]\n[[meshes]]\nfile = \"tilt.obj\"\nmaterial = \"m\"\nsmooth = {smooth}\n"
+            ),
+        )
+        .unwrap();
+        Scene::load(&path).unwrap()
+    };
+    // Grazing from +x, going −x and slightly down: about the tilted normal it turns under.
+    let (from, dir) = ([6.0f32, 0.3, 0.0], [-1.0f32, -0.05, 0.0]);
+    let smooth = scene(true);
+    let (buf, spec) = buffers(&smooth, 8, 8, TriangleAlgorithm::Watertight);
+    assert!(spec.smooth && spec.whitted);
+    let out = glint::cpu::secondary_rays_f32(&buf, spec, from, dir);
+    assert_eq!(out.len(), 1);
+    assert!(
+        out[0].1[1] > 0.0,
+        "the reflected ray must leave above: {:?}",
+        out[0].1
+    );
+    assert!(out[0].0[1] > 0.0, "from above the surface: {:?}", out[0].0);
+    // The twin: about the shading normal alone it would go under.
+    let len = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
+    let dn = [dir[0] / len, dir[1] / len];
+    let cos_i = -(dn[0] * -s + dn[1] * c);
+    let raw_y = dn[1] + c * 2.0 * cos_i;
+    assert!(raw_y < 0.0, "the case must exercise the rule: {raw_y}");
+    let flat = scene(false);
+    let (fbuf, fspec) = buffers(&flat, 8, 8, TriangleAlgorithm::Watertight);
+    let f = glint::cpu::secondary_rays_f32(&fbuf, fspec, from, dir);
+    assert!(
+        (f[0].1[1] - 0.05 / len).abs() < 1e-6,
+        "a flat mirror reflects about its plane: {:?}",
+        f[0].1
+    );
+}
