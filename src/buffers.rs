@@ -1,8 +1,8 @@
 //! The flattening of a [`Scene`] into the buffers both tracers read ([`SceneBuffers`]),
 //! and the pipeline's specialisation ([`Specialisation`]). The structs themselves, their
-//! codes and constants are the contract in [`crate::kernel::layout`], re-exported here.
+//! codes and constants are the contract in [`crate::shared::layout`], re-exported here.
 
-pub use crate::kernel::layout::*;
+pub use crate::shared::layout::*;
 
 use rayon::prelude::*;
 
@@ -49,8 +49,8 @@ pub fn exponent_as_int(n: f32) -> i32 {
 
 /// The camera basis of the scene format (README, "Scene format") in f32, evaluated left to right: (forward, right, up').
 pub fn camera_basis(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> [[f32; 3]; 3] {
-    use crate::kernel::real::V3;
-    crate::kernel::real::camera_basis::<f32>(V3::from(eye), V3::from(look_at), V3::from(up))
+    use crate::shared::real::V3;
+    crate::shared::real::camera_basis::<f32>(V3::from(eye), V3::from(look_at), V3::from(up))
         .map(Into::into)
 }
 

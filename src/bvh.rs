@@ -12,7 +12,7 @@
 //! size and position before the tree is built, so the rounding of a sphere's bound and a
 //! triangle test that accepts a ray a few ULP outside its triangle still find the box.
 
-use crate::kernel::layout::{BvhNode, Sphere, TRIANGLE_BIT, Triangle};
+use crate::shared::layout::{BvhNode, Sphere, TRIANGLE_BIT, Triangle};
 use glam::Vec4;
 
 /// Number of centroid bins per axis in the SAH sweep.

@@ -23,7 +23,7 @@ use std::sync::{Arc, Mutex};
 const CODE: &[&[u8]] = &[
     include_bytes!("cache.rs"),
     include_bytes!("bvh.rs"),
-    include_bytes!("kernel/layout.rs"),
+    include_bytes!("shared/layout.rs"),
     include_bytes!("scene/mesh.rs"),
     include_bytes!("scene/obj.rs"),
 ];

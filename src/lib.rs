@@ -26,7 +26,7 @@ pub mod cpu;
 pub mod fuzzing;
 pub mod gpu;
 pub mod image;
-pub mod kernel;
+pub mod shared;
 #[doc(hidden)]
 pub mod oracle;
 pub mod render;

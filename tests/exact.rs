@@ -36,7 +36,7 @@ fn specialisations() -> [Specialisation; 2] {
     let all = Specialisation {
         has_spheres: true,
         has_triangles: true,
-        triangle_algo: glint::kernel::layout::TRIANGLE_WATERTIGHT,
+        triangle_algo: glint::shared::layout::TRIANGLE_WATERTIGHT,
         uses_diffuse: true,
         uses_phong: true,
         shadows: true,
@@ -47,7 +47,7 @@ fn specialisations() -> [Specialisation; 2] {
     };
     let lean = Specialisation {
         has_triangles: false,
-        triangle_algo: glint::kernel::layout::TRIANGLE_NAIVE,
+        triangle_algo: glint::shared::layout::TRIANGLE_NAIVE,
         shadows: false,
         use_bvh: false,
         smooth: false,

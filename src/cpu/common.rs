@@ -13,7 +13,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::buffers::{SceneBuffers, Specialisation};
-use crate::kernel::real::{Real, V3};
+use crate::shared::real::{Real, V3};
 
 /// WGSL `BVH_STACK`: the traversal stack, as deep as the builder lets a tree be.
 pub const BVH_STACK: usize = crate::bvh::MAX_DEPTH;
@@ -105,7 +105,7 @@ pub fn max2<R: Real>(a: R, b: R) -> R {
 }
 
 /// WGSL `flush`: `x`, or 0 where |x| is below the smallest normal f32
-/// ([`crate::kernel::layout::FLUSH_BELOW`], the same threshold in f64: the model's, not the
+/// ([`crate::shared::layout::FLUSH_BELOW`], the same threshold in f64: the model's, not the
 /// type's).
 #[inline]
 pub fn flush<R: Real>(x: R) -> R {
@@ -131,8 +131,8 @@ pub fn clamp01<R: Real>(x: R) -> R {
 }
 
 /// WGSL `to_u8` and `pack_rgba8`, in their place in the mirror: defined on the ground
-/// floor (`kernel::real`), since the image writer, below this floor, quantises with them.
-pub use crate::kernel::real::{pack_rgba8, to_u8};
+/// floor (`shared::real`), since the image writer, below this floor, quantises with them.
+pub use crate::shared::real::{pack_rgba8, to_u8};
 
 /// WGSL `in_interval`: whether t lies in (t_min, t_max); false for NaN.
 #[inline]

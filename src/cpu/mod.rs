@@ -4,8 +4,8 @@
 pub mod common;
 pub mod packet;
 pub mod prims;
-/// The numeric kernel ([`crate::kernel::real`]), where the mirror's arithmetic lives.
-pub use crate::kernel::real;
+/// The numeric kernel ([`crate::shared::real`]), where the mirror's arithmetic lives.
+pub use crate::shared::real;
 pub mod trace;
 pub mod whitted;
 
@@ -19,7 +19,7 @@ use crate::scene::Scene;
 use real::{Real, V3};
 use trace::{Camera, Globals};
 
-pub use crate::kernel::real::camera_basis;
+pub use crate::shared::real::camera_basis;
 
 /// Called with (rows done, rows in all) as rows finish, from any thread.
 pub type Progress<'a> = dyn Fn(u32, u32) + Sync + 'a;

@@ -15,7 +15,7 @@ use crate::buffers::{
     FLAT, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE, TRIANGLE_WATERTIGHT,
     Triangle,
 };
-use crate::kernel::real::{Real, V3};
+use crate::shared::real::{Real, V3};
 
 // ---- spheres -----------------------------------------------------------------------------
 

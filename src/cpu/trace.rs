@@ -14,7 +14,7 @@ use super::prims::{
 use crate::buffers::{
     BvhNode, HitOut, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, RayIn, TRIANGLE_BIT,
 };
-use crate::kernel::real::{Real, V3};
+use crate::shared::real::{Real, V3};
 
 // ---- the camera ------------------------------------------------------------------------
 

@@ -9,7 +9,7 @@ use super::common::{Globals, Hit, Ray, clamp01, flush, flush3, max0, max2};
 use super::prims::{prim_material, prim_normal, shading_at};
 use super::trace::{closest_hit, shade};
 use crate::buffers::{Material, PRIM_NONE};
-use crate::kernel::real::{Real, V3};
+use crate::shared::real::{Real, V3};
 
 /// WGSL `WHITTED_STACK`: the most rays waiting at once (max_depth + 1 for the largest
 /// max_depth, 16).

@@ -52,7 +52,7 @@ pub enum ImageError {
 }
 
 /// One channel to 8 bits (the shader's `to_u8`, glint's one quantisation).
-pub use crate::kernel::real::to_u8;
+pub use crate::shared::real::to_u8;
 
 /// The 8-bit RGB bytes of `[r, g, b, t]` pixels (`to_u8` of each channel), in parallel.
 fn rgb8(pixels: &[[f32; 4]]) -> Vec<u8> {

@@ -20,8 +20,8 @@ use toml::Spanned;
 /// The largest width or height accepted (the GPU renders larger frames in tiles).
 pub const MAX_IMAGE_SIDE: i64 = 32_768;
 
-/// The largest `[camera] samples` (per pixel side): the contract's [`crate::kernel::layout::MAX_SAMPLES`].
-pub const MAX_SAMPLES: u32 = crate::kernel::layout::MAX_SAMPLES;
+/// The largest `[camera] samples` (per pixel side): the contract's [`crate::shared::layout::MAX_SAMPLES`].
+pub const MAX_SAMPLES: u32 = crate::shared::layout::MAX_SAMPLES;
 
 /// Ray/triangle intersection algorithm.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -42,12 +42,12 @@ impl TriangleAlgorithm {
         TriangleAlgorithm::Watertight,
     ];
 
-    /// The `TRIANGLE_ALGO` code of `kernel::layout`.
+    /// The `TRIANGLE_ALGO` code of `shared::layout`.
     pub fn code(self) -> u32 {
         match self {
-            TriangleAlgorithm::Naive => crate::kernel::layout::TRIANGLE_NAIVE,
-            TriangleAlgorithm::MollerTrumbore => crate::kernel::layout::TRIANGLE_MOLLER_TRUMBORE,
-            TriangleAlgorithm::Watertight => crate::kernel::layout::TRIANGLE_WATERTIGHT,
+            TriangleAlgorithm::Naive => crate::shared::layout::TRIANGLE_NAIVE,
+            TriangleAlgorithm::MollerTrumbore => crate::shared::layout::TRIANGLE_MOLLER_TRUMBORE,
+            TriangleAlgorithm::Watertight => crate::shared::layout::TRIANGLE_WATERTIGHT,
         }
     }
 

@@ -4,7 +4,7 @@
 // Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
 #![allow(clippy::needless_range_loop)]
 
-use crate::kernel::real::V3;
+use crate::shared::real::V3;
 
 /// Rays per packet.
 pub const LANES: usize = 16;
@@ -321,7 +321,7 @@ pub(super) fn choose_bits(m: Mask, l: usize, a: u32, b: u32) -> u32 {
 /// (it gives 0): the callers' values never are.
 #[inline(always)]
 pub(super) fn flush_nonneg(x: f32) -> f32 {
-    if x < crate::kernel::layout::FLUSH_BELOW {
+    if x < crate::shared::layout::FLUSH_BELOW {
         0.0
     } else {
         x
@@ -474,7 +474,7 @@ mod tests {
     /// boundary's neighbourhood, zeros, infinity, NaNs and every exponent: the values a
     /// shading term can take (not negative, or NaN).
     fn first_wrong_flush(f: impl Fn(f32) -> f32) -> Option<f32> {
-        let min = crate::kernel::layout::FLUSH_BELOW;
+        let min = crate::shared::layout::FLUSH_BELOW;
         let mut xs = vec![
             0.0,
             -0.0,
@@ -506,7 +506,7 @@ mod tests {
     #[test]
     fn a_wrong_flush_is_caught() {
         let le = |x: f32| {
-            if x <= crate::kernel::layout::FLUSH_BELOW {
+            if x <= crate::shared::layout::FLUSH_BELOW {
                 0.0
             } else {
                 x

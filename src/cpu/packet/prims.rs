@@ -17,7 +17,7 @@ use crate::buffers::{
 };
 use crate::cpu::common::{Globals, Hit, Ray, in_interval, sign_nonneg};
 use crate::cpu::prims::{Shear, edge_function, hit_prim};
-use crate::kernel::real::V3;
+use crate::shared::real::V3;
 
 /// The lanes' `Shear`s as structure of arrays.
 pub(super) struct ShearLanes {
@@ -557,7 +557,7 @@ pub(super) mod tests {
     use super::super::common::{LANES, Lanes, PerLane, Shared};
     use super::*;
     use crate::cpu::prims::hit_sphere;
-    use crate::kernel::real::V3;
+    use crate::shared::real::V3;
 
     /// A small deterministic generator (xorshift64*), uniform in [0, 1); the packet
     /// tests' (`trace.rs` uses it too).

@@ -21,7 +21,7 @@ use crate::cpu::prims::{hit_prim, shading_at};
 use crate::cpu::trace::{
     finite_bound, nearer, phong_power, sample_offset, shadow_origin, tie_bound,
 };
-use crate::kernel::real::V3;
+use crate::shared::real::V3;
 
 /// `box_interval` for every lane at once: the lanes whose ray meets `node`'s box in
 /// (t_min, bound), and each lane's entry distance. The same operations as

@@ -1,4 +1,4 @@
-//! The numeric kernel, at the bottom of the house (imports only `kernel::layout`'s
+//! The numeric kernel, at the bottom of the house (imports only `shared::layout`'s
 //! constants): the arithmetic the CPU tracer is written in: a scalar [`Real`] (f32 to mirror the
 //! shader, f64 for the ground truth) and a three-vector [`V3`] whose every operation is
 //! written out in WGSL's order.
@@ -59,12 +59,12 @@ pub trait Real:
 impl Real for f32 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
-    const INFINITY: Self = crate::kernel::layout::INFINITY;
-    const SPLITTER: Self = crate::kernel::layout::SPLITTER;
-    const EPSILON: Self = crate::kernel::layout::SHADOW_EPSILON;
-    const BOX_SLACK: Self = crate::kernel::layout::BOX_SLACK;
-    const NAIVE_MIN_SIN2: Self = crate::kernel::layout::NAIVE_MIN_SIN2;
-    const FLUSH_BELOW: Self = crate::kernel::layout::FLUSH_BELOW;
+    const INFINITY: Self = crate::shared::layout::INFINITY;
+    const SPLITTER: Self = crate::shared::layout::SPLITTER;
+    const EPSILON: Self = crate::shared::layout::SHADOW_EPSILON;
+    const BOX_SLACK: Self = crate::shared::layout::BOX_SLACK;
+    const NAIVE_MIN_SIN2: Self = crate::shared::layout::NAIVE_MIN_SIN2;
+    const FLUSH_BELOW: Self = crate::shared::layout::FLUSH_BELOW;
     fn bits_plus_one(self) -> Self {
         f32::from_bits(self.to_bits().wrapping_add(1))
     }
@@ -96,7 +96,7 @@ impl Real for f64 {
     const EPSILON: Self = f64::EPSILON;
     const BOX_SLACK: Self = 4.0 * f64::EPSILON;
     const NAIVE_MIN_SIN2: Self = 16.0 * f64::EPSILON;
-    const FLUSH_BELOW: Self = crate::kernel::layout::FLUSH_BELOW as f64;
+    const FLUSH_BELOW: Self = crate::shared::layout::FLUSH_BELOW as f64;
     fn bits_plus_one(self) -> Self {
         f64::from_bits(self.to_bits().wrapping_add(1))
     }
