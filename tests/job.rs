@@ -111,27 +111,7 @@ fn the_scene_file_is_never_overwritten() {
 fn auto_falls_back_to_the_cpu_when_the_gpu_cannot_hold_the_scene() {
     let Some(gpu) = common::gpu() else { return };
     let d = common::Scratch::new("job-fallback");
-    let mut obj = String::new();
-    for i in 0..30_000 {
-        let (x, y) = ((i % 200) as f32 * 0.02 - 2.0, (i / 200) as f32 * 0.02 - 1.5);
-        obj += &format!(
-            "v {x} {y} 0\nv {} {y} 0\nv {x} {} 0\n",
-            x + 0.015,
-            y + 0.015
-        );
-    }
-    for i in 0..30_000 {
-        obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
-    }
-    std::fs::write(d.join("many.obj"), obj).unwrap();
-    let path = d.join("many.toml");
-    std::fs::write(
-        &path,
-        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 60.0\nwidth = 64\n\
-         height = 48\n[materials.m]\nmodel = \"ambient\"\nka = [1.0, 1.0, 1.0]\n\
-         [[meshes]]\nfile = \"many.obj\"\nmaterial = \"m\"\n",
-    )
-    .unwrap();
+    let path = common::too_large_scene(&d);
     let scene = glint::scene::Scene::load(&path).unwrap();
     let options = GpuOptions {
         max_buffer_bytes: Some(1_000_000),

@@ -70,27 +70,7 @@ fn frame_of_8192_squared_renders_in_tiles() {
 fn scenes_larger_than_the_gpu_fall_back_to_the_cpu_under_auto() {
     let Some(gpu) = common::gpu() else { return };
     let d = common::Scratch::new("toolarge");
-    let mut obj = String::new();
-    for i in 0..30_000 {
-        let (x, y) = ((i % 200) as f32 * 0.02 - 2.0, (i / 200) as f32 * 0.02 - 1.5);
-        obj += &format!(
-            "v {x} {y} 0\nv {} {y} 0\nv {x} {} 0\n",
-            x + 0.015,
-            y + 0.015
-        );
-    }
-    for i in 0..30_000 {
-        obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
-    }
-    std::fs::write(d.join("many.obj"), obj).unwrap();
-    let scene = d.join("many.toml");
-    std::fs::write(
-        &scene,
-        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 60.0\nwidth = 64\n\
-         height = 48\n[materials.m]\nmodel = \"ambient\"\nka = [1.0, 1.0, 1.0]\n\
-         [[meshes]]\nfile = \"many.obj\"\nmaterial = \"m\"\n",
-    )
-    .unwrap();
+    let scene = common::too_large_scene(&d);
     let run = |backend: &str| {
         common::glint_command()
             .args(["render", scene.to_str().unwrap(), "-o"])

@@ -265,6 +265,33 @@ pub const SHIPPED_SCENES: [&str; 10] = [
     "bb8-mirror",
 ];
 
+/// Writes into `dir` a scene of 30,000 small ambient triangles (`many.obj`, 1.44 MB of
+/// triangles on the GPU: more than a smaller GPU's 1 MB buffer limit) and returns its path.
+pub fn too_large_scene(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut obj = String::new();
+    for i in 0..30_000 {
+        let (x, y) = ((i % 200) as f32 * 0.02 - 2.0, (i / 200) as f32 * 0.02 - 1.5);
+        obj += &format!(
+            "v {x} {y} 0\nv {} {y} 0\nv {x} {} 0\n",
+            x + 0.015,
+            y + 0.015
+        );
+    }
+    for i in 0..30_000 {
+        obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
+    }
+    std::fs::write(dir.join("many.obj"), obj).unwrap();
+    let scene = dir.join("many.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 60.0\nwidth = 64\n\
+         height = 48\n[materials.m]\nmodel = \"ambient\"\nka = [1.0, 1.0, 1.0]\n\
+         [[meshes]]\nfile = \"many.obj\"\nmaterial = \"m\"\n",
+    )
+    .unwrap();
+    scene
+}
+
 /// Loads `scenes/NAME.toml` from the crate root.
 pub fn seed_scene(name: &str) -> Scene {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
