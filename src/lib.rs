@@ -26,11 +26,11 @@ pub mod cpu;
 pub mod fuzzing;
 pub mod gpu;
 pub mod image;
-pub mod shared;
 #[doc(hidden)]
 pub mod oracle;
 pub mod render;
 pub mod scene;
+pub mod shared;
 pub mod stages;
 
 pub use render::{
