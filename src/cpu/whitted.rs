@@ -155,11 +155,23 @@ pub fn secondary<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>, local: V3<R
         weight: V3::splat(R::ZERO),
     };
     let mut stack = [zero; WHITTED_STACK];
-    let mut color = local;
     let mut sp = 0;
     if g.buf.params.max_depth > 0 {
         sp = push_children(g, &mut stack, 0, ray, hit, V3::splat(R::ONE), 0);
     }
+    let color = walk(g, &mut stack, sp, local);
+    V3::new(clamp01(color.x), clamp01(color.y), clamp01(color.z))
+}
+
+/// The loop of WGSL `secondary`: pops the rays on `stack` below `sp` until none is left,
+/// adding each one's weighted colour to `color` and pushing its own rays; the sum, not yet
+/// clamped. (Apart so that the packet tracer can finish a lane's walk here.)
+pub fn walk<R: Real>(
+    g: &Globals<R>,
+    stack: &mut [Pending<R>; WHITTED_STACK],
+    mut sp: usize,
+    mut color: V3<R>,
+) -> V3<R> {
     let background = V3::<R>::from_f32(g.buf.params.background);
     while sp != 0 {
         sp -= 1;
@@ -175,10 +187,10 @@ pub fn secondary<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>, local: V3<R
         }
         color = color + flush3(next.weight * shade(g, r, &h));
         if next.depth < g.buf.params.max_depth {
-            sp = push_children(g, &mut stack, sp, r, &h, next.weight, next.depth);
+            sp = push_children(g, stack, sp, r, &h, next.weight, next.depth);
         }
     }
-    V3::new(clamp01(color.x), clamp01(color.y), clamp01(color.z))
+    color
 }
 
 #[cfg(test)]

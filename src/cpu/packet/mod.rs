@@ -32,6 +32,7 @@
 mod common;
 mod prims;
 mod trace;
+mod whitted;
 
 pub use common::{LANES, Mask, PACKET_H, PACKET_W};
 pub use trace::{NO_SLOT, PacketHits};

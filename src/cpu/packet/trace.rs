@@ -140,10 +140,10 @@ pub(super) fn prefetch_children(g: &Globals<f32>, node: &BvhNode) {
 /// then triangles in index order, each lane's t_max its own nearest t so far. `best`'s
 /// lanes outside `mask` are left as they are.
 #[inline(always)]
-pub(super) fn closest_hit_all_lanes(
+pub(super) fn closest_hit_all_lanes<O: Origins>(
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
-    r: &Lanes<Shared>,
+    r: &Lanes<O>,
     sh: &ShearLanes,
     mask: Mask,
     t_min: f32,
@@ -458,7 +458,7 @@ pub(super) fn closest_hit_packet<B: Build>(
     t_min: f32,
     t_max: f32,
 ) -> PacketHits {
-    let mut out = PacketHits {
+    let out = PacketHits {
         t: [t_max; LANES],
         prim: [PRIM_NONE; LANES],
         u: [0.0; LANES],
@@ -470,8 +470,26 @@ pub(super) fn closest_hit_packet<B: Build>(
     }
     let r = Lanes::new(Shared(rays[0].origin), dir);
     let sh = shear_lanes(dir, g.spec.triangle_algo == TRIANGLE_WATERTIGHT);
+    closest_hit_lanes::<B, _>(b, g, rays, &r, &sh, active, t_min, out)
+}
+
+/// [`closest_hit_packet`] for rays `r` from any origins (`rays` the same rays lane by
+/// lane), `out` holding t_max and no hit in every lane.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn closest_hit_lanes<B: Build, O: Origins>(
+    b: B,
+    g: &Globals<f32>,
+    rays: &[Ray<f32>; LANES],
+    r: &Lanes<O>,
+    sh: &ShearLanes,
+    active: Mask,
+    t_min: f32,
+    mut out: PacketHits,
+) -> PacketHits {
+    let t_max = out.t[0];
     if !g.spec.use_bvh {
-        closest_hit_all_lanes(g, rays, &r, &sh, active, t_min, &mut out);
+        closest_hit_all_lanes(g, rays, r, sh, active, t_min, &mut out);
         return out;
     }
     let slots = &mut out.slots;
@@ -481,7 +499,7 @@ pub(super) fn closest_hit_packet<B: Build>(
     }
     let mut near = [0.0f32; LANES];
     let mut bound = [t_max; LANES];
-    let mut mask = box_lanes::<B, _>(b, &nodes[0], &r, t_min, &bound, &mut near) & active;
+    let mut mask = box_lanes::<B, _>(b, &nodes[0], r, t_min, &bound, &mut near) & active;
     if mask == 0 {
         return out;
     }
@@ -497,8 +515,7 @@ pub(super) fn closest_hit_packet<B: Build>(
         let node = &nodes[at as usize];
         let count = node.count_axis >> 2;
         if count == 0 {
-            let next =
-                descend::<B, _>(b, g, at, node, &r, t_min, &bound, mask, &mut stack, &mut sp);
+            let next = descend::<B, _>(b, g, at, node, r, t_min, &bound, mask, &mut stack, &mut sp);
             if let Some(next) = next {
                 (at, mask) = next;
                 continue;
@@ -507,7 +524,7 @@ pub(super) fn closest_hit_packet<B: Build>(
             for k in node.first..node.first + count {
                 let id = g.buf.prim_ids[k as usize];
                 let tri = leaf_triangle(g, id, k);
-                let h = prim_lanes(g, |l| rays[l], &r, &sh, id, tri, mask, t_min, &bound);
+                let h = prim_lanes(g, |l| rays[l], r, sh, id, tri, mask, t_min, &bound);
                 // The merge as selects over lane arrays, every lane at once (a loop over
                 // the live lanes, through `best[l]`, was scalar code at every leaf).
                 for l in 0..LANES {
@@ -655,7 +672,7 @@ pub(super) fn sample_packet<B: Build>(
         hit[l] = found.prim[l] != PRIM_NONE;
     }
     let lit = mask_of(&hit);
-    let colors = shade_lanes::<B>(b, g, &dir, &found, lit & active);
+    let colors = shade_lanes::<B, _>(b, g, &Shared(g.cam.eye), &dir, &found, lit & active);
     // Loops, not `array::from_fn`: that is a generic function of its own, compiled once
     // for the baseline instruction set and called from every build.
     let bg = g.buf.params.background;
@@ -666,14 +683,7 @@ pub(super) fn sample_packet<B: Build>(
         }
     }
     if g.spec.whitted {
-        // Secondary rays are incoherent: each lane's go through the mirror's own walk.
-        for l in 0..LANES {
-            if found.prim[l] != PRIM_NONE && (active >> l) & 1 != 0 {
-                let local = V3::new(out[l][0], out[l][1], out[l][2]);
-                let c = crate::cpu::whitted::secondary(g, rays[l], &found.hit(l), local);
-                out[l] = [c.x, c.y, c.z, found.t[l]];
-            }
-        }
+        super::whitted::secondary_lanes::<B>(b, g, &rays, &found, lit & active, &mut out);
     }
     out
 }
@@ -686,9 +696,10 @@ pub(super) fn sample_packet<B: Build>(
 /// point on their own ray (far off or infinite for a miss), the material and normal of
 /// the primitive of lane `mask`'s first lane.
 #[inline(always)]
-pub(super) fn shade_lanes<B: Build>(
+pub(super) fn shade_lanes<B: Build, O: Origins>(
     b: B,
     g: &Globals<f32>,
+    origins: &O,
     dir: &[[f32; LANES]; 3],
     found: &PacketHits,
     mask: Mask,
@@ -716,14 +727,15 @@ pub(super) fn shade_lanes<B: Build>(
     for l in 0..LANES {
         one_prim &= (mask >> l) & 1 == 0 || found.prim[l] == prim0;
     }
-    let o = g.cam.eye;
-    // Each lane's own direction and t (a miss's point is far off or infinite: not used).
+    // Each lane's own origin, direction and t (a miss's point is far off or infinite: not
+    // used).
     let mut p = [[0.0f32; LANES]; 3];
     for l in 0..LANES {
         let t = found.t[l];
-        p[0][l] = o.x + dir[0][l] * t;
-        p[1][l] = o.y + dir[1][l] * t;
-        p[2][l] = o.z + dir[2][l] * t;
+        let o = origins.at(l);
+        p[0][l] = o[0] + dir[0][l] * t;
+        p[1][l] = o[1] + dir[1][l] * t;
+        p[2][l] = o[2] + dir[2][l] * t;
     }
     // Each lane's material and its normal before the normalize (`prim_normal`).
     let mut material = [0u32; LANES];
