@@ -13,7 +13,7 @@
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use super::{Format, ImageError, PENDING_TEMP, format_of, temp_path, write_target};
+use super::{Format, ImageError, format_of, set_pending, temp_path, write_target};
 
 /// The channels in the order the file stores them, and the index of each in a
 /// `[r, g, b, t]` pixel.
@@ -91,9 +91,7 @@ impl ExrStream {
         }
         let target = write_target(path);
         let tmp = temp_path(&target, "tmp");
-        if let Ok(mut g) = PENDING_TEMP.lock() {
-            *g = Some(tmp.clone());
-        }
+        set_pending(Some(tmp.clone()));
         let mut stream = ExrStream {
             path: path.to_owned(),
             target,
@@ -164,9 +162,7 @@ impl ExrStream {
             let _ = std::fs::remove_file(&self.tmp);
             return Err(self.io(e));
         }
-        if let Ok(mut g) = PENDING_TEMP.lock() {
-            *g = None;
-        }
+        set_pending(None);
         Ok(())
     }
 }
@@ -176,9 +172,7 @@ impl Drop for ExrStream {
         if self.writer.is_some() {
             self.writer = None;
             let _ = std::fs::remove_file(&self.tmp);
-            if let Ok(mut g) = PENDING_TEMP.lock() {
-                *g = None;
-            }
+            set_pending(None);
         }
     }
 }

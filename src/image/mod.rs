@@ -155,9 +155,7 @@ impl PngStream {
             path: path.to_owned(),
             error: image::ImageError::IoError(std::io::Error::other(e)),
         };
-        if let Ok(mut g) = PENDING_TEMP.lock() {
-            *g = Some(tmp.clone());
-        }
+        set_pending(Some(tmp.clone()));
         let file = std::fs::File::create(&tmp).map_err(io)?;
         let mut e = png::Encoder::new(std::io::BufWriter::new(file), width, height);
         e.set_color(png::ColorType::Rgb);
@@ -224,9 +222,7 @@ impl PngStream {
             path: path.clone(),
             error,
         })?;
-        if let Ok(mut g) = PENDING_TEMP.lock() {
-            *g = None;
-        }
+        set_pending(None);
         Ok(())
     }
 }
@@ -236,9 +232,7 @@ impl Drop for PngStream {
         if self.writer.is_some() {
             self.writer = None;
             let _ = std::fs::remove_file(&self.tmp);
-            if let Ok(mut g) = PENDING_TEMP.lock() {
-                *g = None;
-            }
+            set_pending(None);
         }
     }
 }
@@ -348,7 +342,14 @@ impl Image {
 
 /// The temporary file being written now, if any: removed by [`remove_pending_temp`] (the
 /// command line calls it on SIGINT and SIGTERM).
-pub(crate) static PENDING_TEMP: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+static PENDING_TEMP: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+
+/// Records `tmp` as the temporary file being written now (`None`: none is).
+pub(crate) fn set_pending(tmp: Option<PathBuf>) {
+    if let Ok(mut g) = PENDING_TEMP.lock() {
+        *g = tmp;
+    }
+}
 
 /// Removes the temporary file that [`write_atomically`] is writing, if any. Safe to call
 /// from a signal-handling thread; the finished output file is never touched.
@@ -417,18 +418,14 @@ pub fn write_atomically(
 ) -> Result<(), ImageError> {
     let target = write_target(path);
     let tmp = temp_path(&target, "tmp");
-    if let Ok(mut g) = PENDING_TEMP.lock() {
-        *g = Some(tmp.clone());
-    }
+    set_pending(Some(tmp.clone()));
     let result = write(&tmp).and_then(|()| {
         std::fs::rename(&tmp, &target).map_err(|error| ImageError::Io {
             path: path.to_owned(),
             error,
         })
     });
-    if let Ok(mut g) = PENDING_TEMP.lock() {
-        *g = None;
-    }
+    set_pending(None);
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
