@@ -141,3 +141,82 @@ fn auto_falls_back_to_the_cpu_when_the_gpu_cannot_hold_the_scene() {
     let want = cpu.render(&scene, &RenderOptions::default()).unwrap();
     assert_eq!(bits(report.image.as_ref().unwrap()), bits(&want));
 }
+
+/// A scene edited in memory into one that cannot render (the eye on the look-at point)
+/// is refused before any work with the file loader's key and message, where it used to
+/// render a silent all-background frame; a size outside 1..=32768 is refused too. The
+/// twin: the scene as loaded renders.
+#[test]
+fn a_job_validates_a_scene_edited_in_memory() {
+    let cpu = Renderer::new(Backend::Cpu).unwrap();
+    let good = common::seed_scene("bb8");
+    let mut bad = good.clone();
+    bad.camera.look_at = bad.camera.eye;
+    match Job::borrowed(&bad, Output::Memory)
+        .options(small())
+        .run(&cpu)
+    {
+        Err(RenderError::Scene(e)) => {
+            assert_eq!(e.key(), Some("camera.look_at"));
+            assert!(
+                e.to_string()
+                    .ends_with("camera.look_at: equals camera.eye: no view direction"),
+                "{e}"
+            );
+        }
+        other => panic!("expected a scene error, got {other:?}"),
+    }
+    let zero = RenderOptions {
+        size: Some((0, 72)),
+        ..RenderOptions::default()
+    };
+    assert!(matches!(
+        Job::borrowed(&good, Output::Memory).options(zero).run(&cpu),
+        Err(RenderError::Size(0, 72))
+    ));
+    assert!(
+        Job::borrowed(&good, Output::Memory)
+            .options(small())
+            .run(&cpu)
+            .is_ok()
+    );
+}
+
+/// A job cancelled from its own progress events (as another thread or Ctrl-C would) stops
+/// at the next band with `Cancelled`, and its PNG leaves no file, whole or partial. The
+/// twin: the same job with the flag never set writes the file.
+#[test]
+fn a_cancelled_job_stops_and_leaves_no_file() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let cpu = Renderer::new(Backend::Cpu).unwrap();
+    let dir = common::Scratch::new("job-cancel");
+    let png = dir.join("cancelled.png");
+    let tall = RenderOptions {
+        size: Some((1024, 2048)), // 2 MiB bands: 16 of them
+        ..RenderOptions::default()
+    };
+    let flag = Arc::new(AtomicBool::new(false));
+    let (setter, mut bands) = (flag.clone(), 0);
+    let r = Job::new(common::seed_scene("bb8"), Output::file(&png).unwrap())
+        .options(tall.clone())
+        .cancel_on(flag)
+        .on_event(|e| {
+            if let Event::Rows { .. } = e {
+                bands += 1;
+                setter.store(true, Ordering::Relaxed);
+            }
+        })
+        .run(&cpu);
+    assert!(matches!(r, Err(RenderError::Cancelled)), "{r:?}");
+    assert_eq!(bands, 1, "one band traced after the flag was set");
+    let left: Vec<_> = std::fs::read_dir(&*dir).unwrap().collect();
+    assert!(left.is_empty(), "files left: {left:?}");
+    let report = Job::new(common::seed_scene("bb8"), Output::file(&png).unwrap())
+        .options(tall)
+        .cancel_on(Arc::new(AtomicBool::new(false)))
+        .run(&cpu)
+        .unwrap();
+    assert_eq!(report.height, 2048);
+    assert!(png.is_file());
+}

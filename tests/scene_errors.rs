@@ -166,3 +166,87 @@ fn missing_file_and_non_utf8() {
     let e = Scene::load(&m).unwrap_err();
     assert!(e.to_string().contains("empty"), "{e}");
 }
+
+/// The message of `e` after its `file:line: ` or `file: ` prefix: the key and the message.
+fn key_and_message(e: &SceneError) -> String {
+    let text = e.to_string();
+    let key = e.key().expect("a key");
+    text[text
+        .find(&format!(" {key}: "))
+        .expect("the key in the message")
+        + 1..]
+        .to_string()
+}
+
+/// `Scene::validate` checks a scene edited in memory as loading checks a file: for each
+/// bad value, the in-memory edit and the file with that value give the same key and the
+/// same message (the file's with its line, the edit's without). The twin: the good scene
+/// validates, and two different faults' messages differ.
+#[test]
+fn validate_gives_the_files_errors_for_edits_in_memory() {
+    type Edit = fn(&mut Scene);
+    let cases: [(&str, &str, Edit); 10] = [
+        (
+            "look_at = [0.0, 0.0, 0.0]",
+            "look_at = [0.0, 0.0, 5.0]",
+            |s| s.camera.look_at = s.camera.eye,
+        ),
+        ("up = [0.0, 1.0, 0.0]", "up = [0.0, 0.0, 1.0]", |s| {
+            s.camera.up = [0.0, 0.0, 1.0]
+        }),
+        ("fov = 45.0", "fov = 180.0", |s| s.camera.fov = 180.0),
+        ("width = 64", "width = 0", |s| s.camera.width = 0),
+        ("radius = 1.0", "radius = -2.0", |s| {
+            s.spheres[0].radius = -2.0
+        }),
+        ("n = 28.0", "n = -1.0", |s| s.materials[0].n = -1.0),
+        ("ka = [1.0, 0.0, 0.0]", "ka = [1.0, -0.5, 0.0]", |s| {
+            s.materials[0].ka = [1.0, -0.5, 0.0]
+        }),
+        ("color = [1.0, 1.0, 1.0]", "color = [1.0, 2e7, 1.0]", |s| {
+            s.lights[0].color = [1.0, 2e7, 1.0]
+        }),
+        (
+            "ambient = [0.2, 0.2, 0.2]",
+            "ambient = [0.2, 0.2, 0.2]\nmax_depth = 17",
+            |s| s.max_depth = 17,
+        ),
+        (
+            "ambient = [0.2, 0.2, 0.2]",
+            "ambient = [0.2, 0.2, 0.2]\nmin_weight = -1.0",
+            |s| s.min_weight = -1.0,
+        ),
+    ];
+    let good = Scene::parse(GOOD, "mem.toml".as_ref()).unwrap();
+    good.validate().expect("the good scene validates");
+    let mut messages = Vec::new();
+    for (from, to, edit) in cases {
+        let file_error = Scene::parse(&GOOD.replacen(from, to, 1), "mem.toml".as_ref())
+            .expect_err(&format!("{to:?} was accepted"));
+        let mut s = good.clone();
+        edit(&mut s);
+        let e = s
+            .validate()
+            .expect_err(&format!("the edit for {to:?} was accepted"));
+        assert!(matches!(e, SceneError::Value { .. }), "{e:?}");
+        assert_eq!(e.line(), None);
+        assert!(e.to_string().starts_with("mem.toml: "), "{e}");
+        assert_eq!(key_and_message(&e), key_and_message(&file_error), "{to:?}");
+        messages.push(key_and_message(&e));
+    }
+    assert_ne!(
+        messages[0], messages[1],
+        "the twin: different faults differ"
+    );
+    // A material index past the list, which a file cannot express.
+    let mut s = good.clone();
+    s.spheres[0].material = 7;
+    let e = s.validate().unwrap_err();
+    assert_eq!(e.key(), Some("spheres[0].material"));
+    let mut s = good;
+    s.triangles[0].vertices[1][2] = f32::NAN;
+    assert_eq!(
+        s.validate().unwrap_err().key(),
+        Some("triangles[0].vertices")
+    );
+}

@@ -69,7 +69,8 @@ pub fn compare(
     options: &RenderOptions,
     gpu: &Gpu,
 ) -> Result<CompareReport, RenderError> {
-    let (w, h) = options.size.unwrap_or(scene.size());
+    scene.validate()?;
+    let (w, h) = options.checked_size(scene)?;
     let algo = options.triangle.unwrap_or(scene.triangle);
     let mut warnings: Vec<Warning> = scene.warnings.iter().cloned().map(Warning::Scene).collect();
     warnings.extend(scene.range_warnings(algo).into_iter().map(Warning::Range));

@@ -2,6 +2,8 @@
 //! `glint render` makes it.
 
 use std::fmt;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use super::output::{Output, Sink};
@@ -178,6 +180,7 @@ pub struct Job<'a> {
     output: Output,
     options: RenderOptions,
     events: Box<dyn FnMut(Event<'_>) + 'a>,
+    cancel: Option<Arc<AtomicBool>>,
 }
 
 /// The parts of a job that its stages share.
@@ -185,9 +188,15 @@ struct Run<'j, 'a> {
     events: &'j mut (dyn FnMut(Event<'_>) + 'a),
     warnings: Vec<Warning>,
     notes: Vec<Note>,
+    cancel: Option<&'j AtomicBool>,
 }
 
 impl Run<'_, '_> {
+    /// Whether [`Job::cancel_on`]'s flag is set.
+    fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+
     fn warn(&mut self, w: Warning) {
         (self.events)(Event::Warning(&w));
         self.warnings.push(w);
@@ -219,6 +228,7 @@ impl<'a> Job<'a> {
             output,
             options: RenderOptions::default(),
             events: Box::new(|_| {}),
+            cancel: None,
         }
     }
 
@@ -229,6 +239,7 @@ impl<'a> Job<'a> {
             output,
             options: RenderOptions::default(),
             events: Box::new(|_| {}),
+            cancel: None,
         }
     }
 
@@ -244,6 +255,15 @@ impl<'a> Job<'a> {
         self
     }
 
+    /// Stops the job at the next band once `flag` is set (from another thread, or a signal
+    /// handler): [`Job::run`] then returns [`RenderError::Cancelled`] and leaves no file
+    /// behind. The CPU tracers look at it between bands of at most 2 MiB of pixels; the GPU
+    /// finishes the frame's dispatches and writes nothing more.
+    pub fn cancel_on(mut self, flag: Arc<AtomicBool>) -> Job<'a> {
+        self.cancel = Some(flag);
+        self
+    }
+
     /// Renders the frame on `renderer` and writes it to the output.
     pub fn run(self, renderer: &Renderer) -> Result<RenderReport, RenderError> {
         let start = Instant::now();
@@ -252,11 +272,13 @@ impl<'a> Job<'a> {
             output,
             options,
             mut events,
+            cancel,
         } = self;
         let mut run = Run {
             events: &mut *events,
             warnings: Vec::new(),
             notes: Vec::new(),
+            cancel: cancel.as_deref(),
         };
         let (mut owned, borrowed) = match scene {
             Source::Owned(s) => (Some(s), None),
@@ -281,6 +303,9 @@ impl<'a> Job<'a> {
         }
         let mut sink = Sink::open(&output, w, h)?;
         let traced = trace(renderer, scene, &mut buf, &mut sink, &mut run)?;
+        if run.cancelled() {
+            return Err(RenderError::Cancelled);
+        }
         let image = crate::stages::time("write", || sink.finish())?;
         let t_wait = Instant::now();
         if cache.is_some_and(|c| c.finish_writes() > 0) {
@@ -330,10 +355,11 @@ fn prepare(
     {
         return Err(RenderError::OverwritesScene(p.to_owned()));
     }
+    scene.validate()?;
     for w in &scene.warnings {
         run.warn(Warning::Scene(w.clone()));
     }
-    let (w, h) = options.size.unwrap_or(scene.size());
+    let (w, h) = options.checked_size(scene)?;
     let algo = options.triangle.unwrap_or(scene.triangle);
     for m in crate::stages::time("checks", || scene.range_warnings(algo)) {
         run.warn(Warning::Range(m));
@@ -405,12 +431,15 @@ fn cpu_bands(
     spec: Specialisation,
     sink: &mut Sink,
     run: &mut Run<'_, '_>,
-) -> Result<Duration, ImageError> {
+) -> Result<Duration, RenderError> {
     let (w, h) = (buf.params.width, buf.params.height);
     let rows_per_band = band_rows(w, h, CPU_BAND_MIB);
     let mut frame = Duration::ZERO;
     let mut y = 0;
     while y < h {
+        if run.cancelled() {
+            return Err(RenderError::Cancelled);
+        }
         let rows = rows_per_band.min(h - y);
         let t = Instant::now();
         let px = match f64_scene {
@@ -445,8 +474,9 @@ fn gpu_bands(
         gpu.compute_kernel(spec)?
     };
     let mut written: Result<(), ImageError> = Ok(());
+    let cancel = run.cancel;
     let mut rows = |y: u32, n: usize, write: &mut dyn FnMut() -> Result<(), ImageError>| {
-        if written.is_ok() {
+        if written.is_ok() && !cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             written = crate::stages::time("encode", write);
         }
         let done = y + (n / w as usize) as u32;

@@ -96,6 +96,17 @@ pub struct RenderOptions {
 }
 
 impl RenderOptions {
+    /// The frame's size: [`RenderOptions::size`], else the scene camera's; each side in
+    /// 1..=[`crate::scene::MAX_IMAGE_SIDE`], as the scene file's are.
+    pub fn checked_size(&self, scene: &Scene) -> Result<(u32, u32), RenderError> {
+        let (w, h) = self.size.unwrap_or(scene.size());
+        let ok = |x: u32| (1..=crate::scene::MAX_IMAGE_SIDE).contains(&(x as i64));
+        if !(ok(w) && ok(h)) {
+            return Err(RenderError::Size(w, h));
+        }
+        Ok((w, h))
+    }
+
     /// Sets `buf`'s frame values that these options override (samples, depth).
     pub(crate) fn apply(&self, buf: &mut crate::buffers::SceneBuffers) {
         if let Some(n) = self.samples {
@@ -119,6 +130,15 @@ pub enum RenderError {
     /// The frame cannot fit in this process's memory (checked before any work).
     #[error(transparent)]
     Memory(#[from] super::memory::MemoryError),
+    /// The scene's values are out of their domain ([`Scene::validate`]).
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    /// The frame size asked for has a side outside 1..=[`crate::scene::MAX_IMAGE_SIDE`].
+    #[error("size {0}x{1}: each side must be in 1..={max}", max = crate::scene::MAX_IMAGE_SIDE)]
+    Size(u32, u32),
+    /// The job was cancelled ([`super::Job::cancel_on`]).
+    #[error("cancelled")]
+    Cancelled,
     /// The output is the scene file itself.
     #[error("{}: the output would overwrite the scene file", .0.display())]
     OverwritesScene(std::path::PathBuf),

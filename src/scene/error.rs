@@ -37,6 +37,18 @@ pub enum SceneError {
         /// What is wrong and what is allowed.
         message: String,
     },
+    /// A value of a scene built or edited in memory is out of its domain
+    /// ([`super::Scene::validate`]): the same key and message as [`SceneError::Invalid`]
+    /// for a file, without a line.
+    #[error("{file}: {key}: {message}")]
+    Value {
+        /// The scene's path ([`super::Scene::path`]).
+        file: PathBuf,
+        /// The key at fault, with its table (`spheres[2].radius`).
+        key: String,
+        /// What is wrong and what is allowed.
+        message: String,
+    },
     /// A mesh file is bad.
     #[error("{file}:{line}: {key}: mesh {mesh}: {error}")]
     Mesh {
@@ -59,7 +71,7 @@ impl SceneError {
     /// The 1-based line the error points at, when it has one.
     pub fn line(&self) -> Option<usize> {
         match self {
-            SceneError::Io { .. } => None,
+            SceneError::Io { .. } | SceneError::Value { .. } => None,
             SceneError::Syntax { line, .. }
             | SceneError::Invalid { line, .. }
             | SceneError::Mesh { line, .. } => Some(*line),
@@ -72,6 +84,7 @@ impl SceneError {
             SceneError::Io { .. } => None,
             SceneError::Syntax { key, .. }
             | SceneError::Invalid { key, .. }
+            | SceneError::Value { key, .. }
             | SceneError::Mesh { key, .. } => Some(key),
         }
     }

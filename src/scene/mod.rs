@@ -6,6 +6,7 @@ mod format;
 mod mesh;
 mod obj;
 pub mod range;
+mod validate;
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -563,27 +564,23 @@ impl Validator<'_> {
         })
     }
 
+    /// `check`'s verdict on `v`, its failure placed at `span` under `key`.
+    fn check<T, U>(
+        &self,
+        v: T,
+        span: std::ops::Range<usize>,
+        key: &str,
+        check: impl FnOnce(T) -> Result<U, String>,
+    ) -> Result<U, SceneError> {
+        check(v).or_else(|m| self.err(span, key, m))
+    }
+
     fn finite3(&self, v: &Vec3File, key: &str) -> Result<[f32; 3], SceneError> {
-        let a = *v.get_ref();
-        if a.iter().any(|x| !x.is_finite()) {
-            return self.err(v.span(), key, format!("{a:?} is not finite"));
-        }
-        Ok(a)
+        self.check(*v.get_ref(), v.span(), key, validate::finite3)
     }
 
     fn colour(&self, v: &Vec3File, key: &str) -> Result<[f32; 3], SceneError> {
-        let a = self.finite3(v, key)?;
-        if a.iter().any(|&x| x < 0.0) {
-            return self.err(v.span(), key, format!("{a:?} has a negative component"));
-        }
-        if a.iter().any(|&x| x > MAX_COLOUR) {
-            return self.err(
-                v.span(),
-                key,
-                format!("{a:?} has a component above {MAX_COLOUR:e}, more than shading can add up in f32 without overflow"),
-            );
-        }
-        Ok(a)
+        self.check(*v.get_ref(), v.span(), key, validate::colour)
     }
 
     fn material_index(
@@ -597,15 +594,7 @@ impl Validator<'_> {
             None => self.err(
                 name.span(),
                 key,
-                format!(
-                    "no material named {:?} (defined: {})",
-                    name.get_ref(),
-                    if names.is_empty() {
-                        "none".to_string()
-                    } else {
-                        names.join(", ")
-                    }
-                ),
+                validate::no_material(name.get_ref(), names),
             ),
         }
     }
@@ -655,14 +644,12 @@ impl Validator<'_> {
         for (i, s) in f.spheres.iter().enumerate() {
             let s = s.get_ref();
             let center = self.finite3(&s.center, &format!("spheres[{i}].center"))?;
-            let radius = *s.radius.get_ref();
-            if !(radius.is_finite() && radius > 0.0) {
-                return self.err(
-                    s.radius.span(),
-                    &format!("spheres[{i}].radius"),
-                    format!("{radius} must be finite and > 0"),
-                );
-            }
+            let radius = self.check(
+                *s.radius.get_ref(),
+                s.radius.span(),
+                &format!("spheres[{i}].radius"),
+                validate::radius,
+            )?;
             let material =
                 self.material_index(&names, &s.material, &format!("spheres[{i}].material"))?;
             spheres.push(Sphere {
@@ -761,72 +748,24 @@ impl Validator<'_> {
             Some(v) => self.finite3(v, "camera.up")?,
             None => [0.0, 1.0, 0.0],
         };
-        let fov = *c.fov.get_ref();
-        if !(fov > 0.0 && fov < 180.0) {
-            return self.err(
-                c.fov.span(),
-                "camera.fov",
-                format!("{fov} must be in (0, 180) degrees"),
-            );
-        }
-        let side = |v: &Spanned<i64>, key: &str| -> Result<u32, SceneError> {
-            let x = *v.get_ref();
-            if !(1..=MAX_IMAGE_SIDE).contains(&x) {
-                return self.err(
-                    v.span(),
-                    key,
-                    format!("{x} must be in 1..={MAX_IMAGE_SIDE}"),
-                );
-            }
-            Ok(x as u32)
-        };
+        let fov = self.check(*c.fov.get_ref(), c.fov.span(), "camera.fov", validate::fov)?;
+        let side =
+            |v: &Spanned<i64>, key: &str| self.check(*v.get_ref(), v.span(), key, validate::side);
         let width = side(&c.width, "camera.width")?;
         let height = side(&c.height, "camera.height")?;
         let samples = match &c.samples {
             None => 1,
-            Some(v) => {
-                let n = *v.get_ref();
-                if !(1..=MAX_SAMPLES as i64).contains(&n) {
-                    return self.err(
-                        v.span(),
-                        "camera.samples",
-                        format!(
-                            "{n} must be in 1..={MAX_SAMPLES} (N×N rays per pixel; 1 is one ray through the centre)"
-                        ),
-                    );
-                }
-                n as u32
-            }
+            Some(v) => self.check(*v.get_ref(), v.span(), "camera.samples", validate::samples)?,
         };
-        // The basis in f64: the view must have a length and up must not be parallel to it.
-        let d = [
-            look_at[0] as f64 - eye[0] as f64,
-            look_at[1] as f64 - eye[1] as f64,
-            look_at[2] as f64 - eye[2] as f64,
-        ];
-        let dl = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        if dl == 0.0 {
-            return self.err(
-                c.look_at.span(),
-                "camera.look_at",
-                "equals camera.eye: no view direction".into(),
-            );
-        }
-        let u = up.map(|x| x as f64);
-        let ul = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
-        let cr = [
-            d[1] * u[2] - d[2] * u[1],
-            d[2] * u[0] - d[0] * u[2],
-            d[0] * u[1] - d[1] * u[0],
-        ];
-        let cl = (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt();
-        if ul == 0.0 || cl <= 1e-6 * dl * ul {
-            let up_span = c.up.as_ref().map(|u| u.span()).unwrap_or(span);
-            return self.err(
-                up_span,
-                "camera.up",
-                format!("{up:?} is zero or parallel to the view direction"),
-            );
+        match validate::view(eye, look_at, up) {
+            Ok(()) => {}
+            Err(validate::ViewFault::LookAt(m)) => {
+                return self.err(c.look_at.span(), "camera.look_at", m);
+            }
+            Err(validate::ViewFault::Up(m)) => {
+                let up_span = c.up.as_ref().map(|u| u.span()).unwrap_or(span);
+                return self.err(up_span, "camera.up", m);
+            }
         }
         Ok(Camera {
             eye,
@@ -874,13 +813,7 @@ impl Validator<'_> {
         let kd = need(&m.kd, "kd", model != Model::Ambient)?;
         let ks = need(&m.ks, "ks", model == Model::Phong)?;
         let n = match &m.n {
-            Some(n) => {
-                let x = *n.get_ref();
-                if !(x.is_finite() && x >= 0.0) {
-                    return self.err(n.span(), &key("n"), format!("{x} must be finite and ≥ 0"));
-                }
-                x
-            }
+            Some(n) => self.check(*n.get_ref(), n.span(), &key("n"), validate::shininess)?,
             None if model == Model::Phong => {
                 return self.err(span, &key("n"), "missing: the phong model needs it".into());
             }
@@ -908,13 +841,7 @@ impl Validator<'_> {
             m.kt.as_ref()
                 .map_or(Ok(d.kt), |v| self.colour(v, &key("kt")))?;
         let ior = match (&m.ior, &m.kt) {
-            (Some(i), _) => {
-                let x = *i.get_ref();
-                if !(x.is_finite() && x > 0.0) {
-                    return self.err(i.span(), &key("ior"), format!("{x} must be finite and > 0"));
-                }
-                x
-            }
+            (Some(i), _) => self.check(*i.get_ref(), i.span(), &key("ior"), validate::ior)?,
             (None, Some(kt)) => {
                 return self.err(
                     kt.span(),
@@ -936,17 +863,7 @@ impl Validator<'_> {
     fn max_depth(&self, v: &Option<Spanned<i64>>) -> Result<u32, SceneError> {
         match v {
             None => Ok(DEFAULT_MAX_DEPTH),
-            Some(v) => {
-                let x = *v.get_ref();
-                if !(0..=MAX_DEPTH as i64).contains(&x) {
-                    return self.err(
-                        v.span(),
-                        "max_depth",
-                        format!("{x} is not in 0..={MAX_DEPTH}"),
-                    );
-                }
-                Ok(x as u32)
-            }
+            Some(v) => self.check(*v.get_ref(), v.span(), "max_depth", validate::max_depth),
         }
     }
 
@@ -954,17 +871,7 @@ impl Validator<'_> {
     fn min_weight(&self, v: &Option<Spanned<f32>>) -> Result<f32, SceneError> {
         match v {
             None => Ok(DEFAULT_MIN_WEIGHT),
-            Some(v) => {
-                let x = *v.get_ref();
-                if !(x.is_finite() && x >= 0.0) {
-                    return self.err(
-                        v.span(),
-                        "min_weight",
-                        format!("{x} must be finite and ≥ 0"),
-                    );
-                }
-                Ok(x)
-            }
+            Some(v) => self.check(*v.get_ref(), v.span(), "min_weight", validate::min_weight),
         }
     }
 }

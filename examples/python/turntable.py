@@ -1,0 +1,165 @@
+#!/usr/bin/env python3
+"""A turntable of any glint scene, its frames rendered across a Dask cluster.
+
+    python examples/python/turntable.py scenes/bb8.toml --frames 36 --out frames/
+    python examples/python/turntable.py scenes/bb8.toml --scheduler tcp://host:8786 --out /shared/frames
+
+Frame k puts the camera's eye at angle 360°·k/N around the vertical line through
+``look_at`` (the scene's up axis), at the scene's own distance and height. Each frame is one
+Dask task: a worker renders it with glint (one renderer per worker process, kept across
+tasks) and writes it to a temporary name in ``--out``, then renames it into place, so a
+frame file is always whole. Where a worker dies, Dask runs its frames again on another; a
+frame written twice is the same bits written twice, never a torn file.
+
+``--scheduler local`` (the default) starts a ``LocalCluster`` on this machine. On a real
+cluster start ``dask scheduler`` on one machine and ``dask worker tcp://HOST:8786`` on each
+of the others (each with glint installed), then pass ``--scheduler tcp://HOST:8786``. The
+scene's mesh files and ``--out`` must be at the same paths on every worker (a shared file
+system).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+import uuid
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Tuple
+
+import glint
+
+
+def frame_scene(scene: glint.Scene, k: int, n: int) -> glint.Scene:
+    """The scene with the camera turned to frame ``k`` of ``n`` around its up axis."""
+    d = scene.to_dict()
+    cam = d["camera"]
+    eye = [float(x) for x in cam["eye"]]
+    at = [float(x) for x in cam["look_at"]]
+    up = [float(x) for x in cam.get("up", [0.0, 1.0, 0.0])]
+    ul = math.sqrt(sum(u * u for u in up))
+    up = [u / ul for u in up]
+    v = [e - a for e, a in zip(eye, at)]
+    h = sum(x * u for x, u in zip(v, up))  # height along up
+    r = [x - h * u for x, u in zip(v, up)]  # the part that turns
+    c = [  # up × r
+        up[1] * r[2] - up[2] * r[1],
+        up[2] * r[0] - up[0] * r[2],
+        up[0] * r[1] - up[1] * r[0],
+    ]
+    angle = 2.0 * math.pi * k / n
+    ca, sa = math.cos(angle), math.sin(angle)
+    cam["eye"] = [a + h * u + ca * x + sa * y for a, u, x, y in zip(at, up, r, c)]
+    base = Path(scene.path).parent
+    return glint.Scene.from_dict(d, base_dir=base)
+
+
+def frame_name(k: int, fmt: str) -> str:
+    """The file name of frame ``k``."""
+    return f"frame_{k:05d}.{fmt}"
+
+
+def render_frame(
+    scene: glint.Scene,
+    k: int,
+    n: int,
+    out: str,
+    fmt: str,
+    backend: str,
+    size: Optional[Tuple[int, int]],
+) -> str:
+    """Renders frame ``k`` of ``n`` and writes it to ``out`` whole: a temporary name,
+    then a rename. Returns the frame's path."""
+    image = glint.render(frame_scene(scene, k, n), backend=backend, size=size)
+    final = os.path.join(out, frame_name(k, fmt))
+    tmp = os.path.join(out, f".{frame_name(k, fmt)}.{uuid.uuid4().hex}.tmp.{fmt}")
+    try:
+        glint.save(image, tmp)
+        os.replace(tmp, final)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return final
+
+
+def run(
+    scene_path: str,
+    frames: int,
+    out: str,
+    scheduler: str = "local",
+    fmt: str = "png",
+    backend: str = "auto",
+    size: Optional[Tuple[int, int]] = None,
+    workers: int = 2,
+    progress: bool = True,
+) -> List[str]:
+    """Renders the turntable on the cluster at ``scheduler`` (or a local one) and returns
+    the frames' paths in order."""
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    os.makedirs(out, exist_ok=True)
+    scene = glint.Scene.load(scene_path)  # errors here, before any task is sent
+    cluster = None
+    if scheduler == "local":
+        cluster = LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+        client = Client(cluster)
+    else:
+        client = Client(scheduler)
+    try:
+        scene_f = client.scatter(scene, broadcast=True)
+        futures = [
+            client.submit(
+                render_frame, scene_f, k, frames, out, fmt, backend, size,
+                key=f"glint-frame-{k}-{uuid.uuid4().hex[:8]}", retries=2,
+            )
+            for k in range(frames)
+        ]
+        start = time.perf_counter()
+        done = 0
+        for fut in as_completed(futures):
+            path = fut.result()
+            done += 1
+            if progress:
+                rate = done / max(time.perf_counter() - start, 1e-9)
+                print(f"[{done}/{frames}] {path} ({rate:.1f} frames/s)", flush=True)
+        return [f.result() for f in futures]
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _size(s: str) -> Tuple[int, int]:
+    w, _, h = s.partition("x")
+    return int(w), int(h)
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    """The command line."""
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("scene", help="the scene file (TOML)")
+    p.add_argument("--frames", type=int, default=36, help="frames in a full turn")
+    p.add_argument("--scheduler", default="local",
+                   help="a Dask scheduler's address, or 'local' for a LocalCluster here")
+    p.add_argument("--out", required=True, help="the folder the frames go to")
+    p.add_argument("--format", choices=["png", "exr"], default="png")
+    p.add_argument("--backend", default="auto", choices=glint.backends())
+    p.add_argument("--size", type=_size, default=None, help="WIDTHxHEIGHT")
+    p.add_argument("--workers", type=int, default=2, help="worker processes of 'local'")
+    a = p.parse_args(argv)
+    if a.frames < 1:
+        p.error("--frames must be at least 1")
+    try:
+        run(a.scene, a.frames, a.out, a.scheduler, a.format, a.backend, a.size, a.workers)
+    except (glint.SceneError, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

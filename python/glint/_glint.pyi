@@ -1,0 +1,100 @@
+"""Type stubs of glint's extension module (re-exported by ``glint``)."""
+
+import os
+from typing import Any, Dict, List, Optional, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+_Path = Union[str, "os.PathLike[str]"]
+
+class SceneError(ValueError):
+    """A scene is invalid: the message names the file, the line and the key."""
+
+    file: Optional[str]
+    line: Optional[int]
+    key: Optional[str]
+
+class RenderError(RuntimeError):
+    """A render failed for a reason other than the scene or a file."""
+
+class Scene:
+    """A validated scene; immutable, picklable (by its text and paths)."""
+
+    @staticmethod
+    def load(path: _Path, *, cache: Union[None, bool, _Path] = None) -> Scene:
+        """Loads and validates a scene file (meshes relative to its folder)."""
+    @staticmethod
+    def from_toml(text: str, base_dir: _Path = ".") -> Scene:
+        """A scene from TOML text; mesh paths resolve against ``base_dir``."""
+    @staticmethod
+    def from_dict(d: Dict[str, Any], base_dir: _Path = ".") -> Scene:
+        """A scene from a dict with the scene file's keys."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The scene as a dict with the scene file's keys."""
+    def to_toml(self) -> str:
+        """The scene as TOML text."""
+    @property
+    def path(self) -> str:
+        """The scene file's path (or ``<dict>`` / ``<toml>`` in the base folder)."""
+    @property
+    def size(self) -> Tuple[int, int]:
+        """The camera's (width, height)."""
+    @property
+    def triangles(self) -> int:
+        """How many triangles, meshes' included."""
+    @property
+    def spheres(self) -> int:
+        """How many spheres."""
+    @property
+    def warnings(self) -> List[str]:
+        """The warnings loading gave."""
+
+class Renderer:
+    """One backend, with its device and compiled pipelines kept across calls."""
+
+    def __init__(self, backend: str = "auto", adapter: Optional[str] = None) -> None: ...
+    def render(
+        self,
+        scene: Union[Scene, _Path, Dict[str, Any]],
+        *,
+        size: Optional[Tuple[int, int]] = None,
+        samples: Optional[int] = None,
+        triangle: Optional[str] = None,
+        max_depth: Optional[int] = None,
+    ) -> npt.NDArray[np.float32]:
+        """Renders a scene: float32 (height, width, 4), RGB and the hit distance t."""
+    @property
+    def backend(self) -> str:
+        """The backend asked for."""
+    @property
+    def note(self) -> Optional[str]:
+        """Why ``auto`` chose what it chose, where it says."""
+    def describe(self) -> str:
+        """What renders, in words."""
+
+def compare_on(
+    renderer: Renderer,
+    scene: Union[Scene, _Path, Dict[str, Any]],
+    *,
+    size: Optional[Tuple[int, int]] = None,
+    samples: Optional[int] = None,
+    triangle: Optional[str] = None,
+    max_depth: Optional[int] = None,
+) -> Dict[str, Any]:
+    """``glint compare`` on a GPU renderer's device."""
+
+def adapters() -> List[Dict[str, str]]:
+    """The Vulkan adapters, best first."""
+
+def save(array: npt.NDArray[np.float32], path: _Path) -> None:
+    """Writes a (height, width, 4) float32 frame as PNG or EXR."""
+
+def load(path: _Path) -> npt.NDArray[np.float32]:
+    """Reads a PNG or EXR as float32 (height, width, 4)."""
+
+def renderers_made() -> int:
+    """How many Renderers this process has made."""
+
+def backends() -> List[str]:
+    """The backend names the library takes."""

@@ -1,0 +1,214 @@
+//! The value checks every scene passes, written once: the file loader puts the failing
+//! key's line in front of the message, and [`Scene::validate`] checks a scene built or
+//! edited in memory with the same keys and the same messages.
+//!
+//! Each check returns the message of its failure, without the file or the key.
+
+use super::{MAX_COLOUR, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SAMPLES, Scene, SceneError};
+
+/// All three components are finite.
+pub(super) fn finite3(a: [f32; 3]) -> Result<[f32; 3], String> {
+    if a.iter().any(|x| !x.is_finite()) {
+        return Err(format!("{a:?} is not finite"));
+    }
+    Ok(a)
+}
+
+/// A colour: finite, ≥ 0 and at most [`MAX_COLOUR`] in every component.
+pub(super) fn colour(a: [f32; 3]) -> Result<[f32; 3], String> {
+    finite3(a)?;
+    if a.iter().any(|&x| x < 0.0) {
+        return Err(format!("{a:?} has a negative component"));
+    }
+    if a.iter().any(|&x| x > MAX_COLOUR) {
+        return Err(format!(
+            "{a:?} has a component above {MAX_COLOUR:e}, more than shading can add up in f32 without overflow"
+        ));
+    }
+    Ok(a)
+}
+
+/// `camera.fov`, in (0, 180) degrees.
+pub(super) fn fov(fov: f32) -> Result<f32, String> {
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(format!("{fov} must be in (0, 180) degrees"));
+    }
+    Ok(fov)
+}
+
+/// `camera.width` or `camera.height`, 1..=[`MAX_IMAGE_SIDE`].
+pub(super) fn side(x: i64) -> Result<u32, String> {
+    if !(1..=MAX_IMAGE_SIDE).contains(&x) {
+        return Err(format!("{x} must be in 1..={MAX_IMAGE_SIDE}"));
+    }
+    Ok(x as u32)
+}
+
+/// `camera.samples`, 1..=[`MAX_SAMPLES`].
+pub(super) fn samples(n: i64) -> Result<u32, String> {
+    if !(1..=MAX_SAMPLES as i64).contains(&n) {
+        return Err(format!(
+            "{n} must be in 1..={MAX_SAMPLES} (N×N rays per pixel; 1 is one ray through the centre)"
+        ));
+    }
+    Ok(n as u32)
+}
+
+/// Which camera key a bad view names.
+pub(super) enum ViewFault {
+    /// `camera.look_at` equals `camera.eye`.
+    LookAt(String),
+    /// `camera.up` is zero or parallel to the view.
+    Up(String),
+}
+
+/// The camera's basis, checked in f64: the view must have a length and up must not be
+/// parallel to it.
+pub(super) fn view(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> Result<(), ViewFault> {
+    let d = [
+        look_at[0] as f64 - eye[0] as f64,
+        look_at[1] as f64 - eye[1] as f64,
+        look_at[2] as f64 - eye[2] as f64,
+    ];
+    let dl = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if dl == 0.0 {
+        return Err(ViewFault::LookAt(
+            "equals camera.eye: no view direction".into(),
+        ));
+    }
+    let u = up.map(|x| x as f64);
+    let ul = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+    let cr = [
+        d[1] * u[2] - d[2] * u[1],
+        d[2] * u[0] - d[0] * u[2],
+        d[0] * u[1] - d[1] * u[0],
+    ];
+    let cl = (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt();
+    if ul == 0.0 || cl <= 1e-6 * dl * ul {
+        return Err(ViewFault::Up(format!(
+            "{up:?} is zero or parallel to the view direction"
+        )));
+    }
+    Ok(())
+}
+
+/// A sphere's radius, finite and > 0.
+pub(super) fn radius(r: f32) -> Result<f32, String> {
+    if !(r.is_finite() && r > 0.0) {
+        return Err(format!("{r} must be finite and > 0"));
+    }
+    Ok(r)
+}
+
+/// A Phong exponent `n`, finite and ≥ 0.
+pub(super) fn shininess(x: f32) -> Result<f32, String> {
+    if !(x.is_finite() && x >= 0.0) {
+        return Err(format!("{x} must be finite and ≥ 0"));
+    }
+    Ok(x)
+}
+
+/// An index of refraction, finite and > 0.
+pub(super) fn ior(x: f32) -> Result<f32, String> {
+    if !(x.is_finite() && x > 0.0) {
+        return Err(format!("{x} must be finite and > 0"));
+    }
+    Ok(x)
+}
+
+/// The scene's `max_depth`, 0..=[`MAX_DEPTH`].
+pub(super) fn max_depth(x: i64) -> Result<u32, String> {
+    if !(0..=MAX_DEPTH as i64).contains(&x) {
+        return Err(format!("{x} is not in 0..={MAX_DEPTH}"));
+    }
+    Ok(x as u32)
+}
+
+/// The scene's `min_weight`, finite and ≥ 0.
+pub(super) fn min_weight(x: f32) -> Result<f32, String> {
+    if !(x.is_finite() && x >= 0.0) {
+        return Err(format!("{x} must be finite and ≥ 0"));
+    }
+    Ok(x)
+}
+
+/// The message of a reference to a material that is not there.
+pub(super) fn no_material(name: &str, names: &[String]) -> String {
+    format!(
+        "no material named {name:?} (defined: {})",
+        if names.is_empty() {
+            "none".to_string()
+        } else {
+            names.join(", ")
+        }
+    )
+}
+
+impl Scene {
+    /// Checks a scene's values as loading a scene file does, with the same keys and
+    /// messages: what a scene built or edited in memory must pass before it renders
+    /// ([`crate::render::Job`] calls it). A loaded scene passes unchanged.
+    ///
+    /// The error is [`SceneError::Value`]: the scene's path and the key, without a line.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let err = |key: String, message: String| SceneError::Value {
+            file: self.path.clone(),
+            key,
+            message,
+        };
+        let at = |key: &str| {
+            let key = key.to_string();
+            move |m: String| err(key.clone(), m)
+        };
+        colour(self.ambient).map_err(at("ambient"))?;
+        colour(self.background).map_err(at("background"))?;
+        max_depth(self.max_depth as i64).map_err(at("max_depth"))?;
+        min_weight(self.min_weight).map_err(at("min_weight"))?;
+        let c = &self.camera;
+        finite3(c.eye).map_err(at("camera.eye"))?;
+        finite3(c.look_at).map_err(at("camera.look_at"))?;
+        finite3(c.up).map_err(at("camera.up"))?;
+        fov(c.fov).map_err(at("camera.fov"))?;
+        side(c.width as i64).map_err(at("camera.width"))?;
+        side(c.height as i64).map_err(at("camera.height"))?;
+        samples(c.samples as i64).map_err(at("camera.samples"))?;
+        view(c.eye, c.look_at, c.up).map_err(|f| match f {
+            ViewFault::LookAt(m) => err("camera.look_at".into(), m),
+            ViewFault::Up(m) => err("camera.up".into(), m),
+        })?;
+        for (i, l) in self.lights.iter().enumerate() {
+            finite3(l.position).map_err(at(&format!("lights[{i}].position")))?;
+            colour(l.color).map_err(at(&format!("lights[{i}].color")))?;
+        }
+        for m in &self.materials {
+            let key = |k: &str| format!("materials.{}.{k}", m.name);
+            colour(m.ka).map_err(at(&key("ka")))?;
+            colour(m.kd).map_err(at(&key("kd")))?;
+            colour(m.ks).map_err(at(&key("ks")))?;
+            shininess(m.n).map_err(at(&key("n")))?;
+            colour(m.optics.kr).map_err(at(&key("kr")))?;
+            colour(m.optics.kt).map_err(at(&key("kt")))?;
+            ior(m.optics.ior).map_err(at(&key("ior")))?;
+        }
+        let names: Vec<String> = self.materials.iter().map(|m| m.name.clone()).collect();
+        let material = |i: u32, key: String| match names.get(i as usize) {
+            Some(_) => Ok(()),
+            None => Err(err(key, no_material(&format!("#{i}"), &names))),
+        };
+        for (i, s) in self.spheres.iter().enumerate() {
+            finite3(s.center).map_err(at(&format!("spheres[{i}].center")))?;
+            radius(s.radius).map_err(at(&format!("spheres[{i}].radius")))?;
+            material(s.material, format!("spheres[{i}].material"))?;
+        }
+        for (i, t) in self.triangles.iter().enumerate() {
+            if t.vertices.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(err(
+                    format!("triangles[{i}].vertices"),
+                    format!("{:?} is not finite", t.vertices),
+                ));
+            }
+            material(t.material, format!("triangles[{i}].material"))?;
+        }
+        Ok(())
+    }
+}
