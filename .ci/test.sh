@@ -3,7 +3,8 @@
 #
 # 1. On a machine with no Vulkan driver it installs Mesa's lavapipe (a CPU Vulkan) first.
 # 2. fmt, clippy -D warnings, then the whole suite on the system's lavapipe.
-# 3. Every test binary with GPU tests again on Mesa 25.0's lavapipe and on Mesa 26.1's,
+# 3. Pass 4: the Python package, `pip install ./python[test]` into a fresh venv, and pytest.
+# 4. Every test binary with GPU tests again on Mesa 25.0's lavapipe and on Mesa 26.1's,
 #    which `.ci/lavapipe.sh` provides without touching the system (Debian 12: from
 #    bookworm-backports and from Debian 13's trixie-backports, unpacked privately; 26.1's
 #    test binaries run through the unpacked tree's own dynamic loader, as cargo's runner).
@@ -42,8 +43,8 @@ if [ -z "${XDG_RUNTIME_DIR:-}" ]; then
     export XDG_RUNTIME_DIR
 fi
 
-cargo fmt --check
-cargo clippy --all-targets --locked -- -D warnings
+cargo fmt --all --check
+cargo clippy --workspace --all-targets --locked -- -D warnings
 cargo build --locked --examples
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked --quiet
 
@@ -71,6 +72,26 @@ fi
 cargo test --locked --no-fail-fast 2>&1 | tee /tmp/glint-pass1.log
 [ "${PIPESTATUS[0]}" = 0 ] || exit 1
 summary+=("pass 1 ($([ "$skip_gpu" = 1 ] && echo 'GPU SKIPPED' || echo "$line1")): $(grep -c '^test .* ok$' /tmp/glint-pass1.log) tests ok in $((SECONDS - start)) s")
+
+# ---- pass 4: the Python package, built into a fresh venv as a user installs it ----------
+# `pip install ./python` (maturin, fetched by pip) and pytest's tests under python/tests:
+# bit-equality with the command line's EXR (GLINT_BIN: pass 1's debug build), errors,
+# pickling, threads, Ctrl-C, and the Dask turntable on a LocalCluster of 2 workers.
+start=$SECONDS
+if ! python3 -m venv --help >/dev/null 2>&1 || ! python3 -c 'import ensurepip' 2>/dev/null; then
+    echo "glint: python3 has no venv module; installing python3-venv"
+    $([ "$(id -u)" -eq 0 ] || echo sudo) apt-get install -y -qq python3-venv >/dev/null
+fi
+rm -rf .cache/pyenv
+python3 -m venv .cache/pyenv
+.cache/pyenv/bin/pip install --quiet --upgrade pip
+echo "=== pass 4: pip install ./python[test], then pytest python/tests ==="
+.cache/pyenv/bin/pip install --quiet "./python[test]"
+cargo build --locked --quiet # the command line the tests compare with
+GLINT_BIN="$PWD/target/debug/glint" .cache/pyenv/bin/python -m pytest python/tests 2>&1 |
+    tee /tmp/glint-pass4.log
+[ "${PIPESTATUS[0]}" = 0 ] || exit 1
+summary+=("pass 4 (Python $(.cache/pyenv/bin/python -c 'import sys; print(sys.version.split()[0])')): $(grep -Eo '[0-9]+ passed' /tmp/glint-pass4.log | tail -1) in $((SECONDS - start)) s")
 
 # ---- passes 2 and 3: the GPU test binaries on Mesa 25.0 and on Mesa 26.1 ---------------
 gpu_bins=()

@@ -7,9 +7,11 @@
 Frame k puts the camera's eye at angle 360°·k/N around the vertical line through
 ``look_at`` (the scene's up axis), at the scene's own distance and height. Each frame is one
 Dask task: a worker renders it with glint (one renderer per worker process, kept across
-tasks) and writes it to a temporary name in ``--out``, then renames it into place, so a
-frame file is always whole. Where a worker dies, Dask runs its frames again on another; a
-frame written twice is the same bits written twice, never a torn file.
+tasks) and ``glint.save`` writes it to a temporary name in ``--out``, then renames it into
+place, so a frame file is always whole. Where a worker dies, Dask runs its frames again on
+another; a frame written twice is the same bits written twice, never a torn file. Once
+every frame is in, the temporary files of writers that died are removed (``--out`` belongs
+to this run).
 
 ``--scheduler local`` (the default) starts a ``LocalCluster`` on this machine. On a real
 cluster start ``dask scheduler`` on one machine and ``dask worker tcp://HOST:8786`` on each
@@ -70,18 +72,22 @@ def render_frame(
     backend: str,
     size: Optional[Tuple[int, int]],
 ) -> str:
-    """Renders frame ``k`` of ``n`` and writes it to ``out`` whole: a temporary name,
-    then a rename. Returns the frame's path."""
+    """Renders frame ``k`` of ``n`` into ``out`` and returns its path. ``glint.save`` writes
+    the file whole: a temporary name in the same folder, then a rename."""
     image = glint.render(frame_scene(scene, k, n), backend=backend, size=size)
     final = os.path.join(out, frame_name(k, fmt))
-    tmp = os.path.join(out, f".{frame_name(k, fmt)}.{uuid.uuid4().hex}.tmp.{fmt}")
-    try:
-        glint.save(image, tmp)
-        os.replace(tmp, final)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    glint.save(image, final)
     return final
+
+
+def remove_stale_temporaries(out: str) -> List[str]:
+    """Removes what killed workers left in ``out``: the temporary files of frames whose
+    writer died before its rename (``.frame_*.tmp``). Called once every frame is in, when
+    no writer of this run is left. Returns their names."""
+    stale = [f for f in os.listdir(out) if f.startswith(".frame_") and f.endswith(".tmp")]
+    for f in stale:
+        os.unlink(os.path.join(out, f))
+    return stale
 
 
 def run(
@@ -126,7 +132,10 @@ def run(
             if progress:
                 rate = done / max(time.perf_counter() - start, 1e-9)
                 print(f"[{done}/{frames}] {path} ({rate:.1f} frames/s)", flush=True)
-        return [f.result() for f in futures]
+        paths = [f.result() for f in futures]
+        for f in remove_stale_temporaries(out):
+            print(f"removed {f}, left by a worker that died while writing", flush=True)
+        return paths
     finally:
         client.close()
         if cluster is not None:

@@ -146,6 +146,8 @@ fn save(py: Python<'_>, array: PyReadonlyArray3<'_, f32>, path: PathBuf) -> PyRe
 /// Reads a PNG or an EXR as `glint compare` reads it: float32 (height, width, 4).
 #[pyfunction]
 fn load(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
+    // The library names a missing file in a decode error; Python wants an OSError.
+    std::fs::metadata(&path).map_err(|e| errors::os_error(&path, &e))?;
     let image = py
         .detach(|| glint::image::Image::load(&path))
         .map_err(|e| image_error(&e))?;

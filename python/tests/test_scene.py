@@ -1,0 +1,119 @@
+"""Scenes from Python: from files, TOML text and dicts, validated as the command line
+validates a file, with its errors; to_dict; pickling."""
+
+from __future__ import annotations
+
+import pickle
+import subprocess
+
+import numpy as np
+import pytest
+
+import glint
+from conftest import ROOT, SCENES, glint_bin, same_bits
+
+GOOD = {
+    "ambient": [0.2, 0.2, 0.2],
+    "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0], "fov": 45, "width": 32, "height": 24},
+    "lights": [{"position": [1.0, 1.0, 2.0], "color": [1.0, 1.0, 1.0]}],
+    "materials": {"red": {"model": "diffuse", "ka": [0.3, 0, 0], "kd": [0.8, 0, 0]}},
+    "spheres": [{"center": [0, 0, 0], "radius": 1.0, "material": "red"}],
+}
+
+
+def test_load_from_toml_and_from_dict_are_one_scene():
+    path = SCENES / "whitted.toml"
+    a = glint.Scene.load(path)
+    b = glint.Scene.from_toml(path.read_text(), base_dir=SCENES)
+    c = glint.Scene.from_dict(a.to_dict(), base_dir=SCENES)
+    assert a.size == b.size == c.size
+    assert a.triangles == b.triangles == c.triangles > 0  # the OBJ floor, read from SCENES
+    images = [glint.render(s, backend="cpu", size=(64, 48)) for s in (a, b, c)]
+    assert same_bits(images[0], images[1]) and same_bits(images[0], images[2])
+    assert str(a.path) == str(path)
+
+
+def test_dicts_take_numpy_values_and_paths():
+    d = dict(GOOD)
+    d["camera"] = dict(GOOD["camera"], eye=np.array([0.0, 0.0, 5.0], np.float32),
+                       fov=np.float32(45), width=np.int64(32))
+    s = glint.Scene.from_dict(d)
+    assert same_bits(glint.render(s, backend="cpu"), glint.render(GOOD, backend="cpu"))
+    mesh = dict(GOOD, meshes=[{"file": SCENES / "whitted-floor.obj"}])
+    assert glint.Scene.from_dict(mesh).triangles > 0
+    with pytest.raises(glint.SceneError, match=r"camera\.eye\[0\]: a object is not"):
+        glint.Scene.from_dict(dict(GOOD, camera=dict(GOOD["camera"], eye=[object(), 0, 0])))
+
+
+def test_to_dict_round_trips():
+    s = glint.Scene.from_dict(GOOD)
+    d = s.to_dict()
+    assert d["camera"]["width"] == 32 and d["materials"]["red"]["model"] == "diffuse"
+    assert glint.Scene.from_dict(d).to_dict() == d
+
+
+def test_a_file_error_is_the_clis_message_with_file_line_and_key(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[camera]\neye=[0.0,0.0,1.0]\nlook_at=[0.0,0.0,1.0]\nfov=40.0\n"
+                   "width=8\nheight=8\n")
+    with pytest.raises(glint.SceneError) as e:
+        glint.Scene.load(bad)
+    assert isinstance(e.value, ValueError)
+    assert (e.value.file, e.value.line, e.value.key) == (str(bad), 3, "camera.look_at")
+    cli = subprocess.run([str(glint_bin()), "render", str(bad), "-o", str(tmp_path / "x.png")],
+                         capture_output=True, text=True)
+    assert cli.returncode == 1
+    assert cli.stderr.strip() == f"error: {e.value}"
+    # The same scene given as a path to render raises the same error.
+    with pytest.raises(glint.SceneError, match="equals camera.eye"):
+        glint.render(bad, backend="cpu")
+
+
+def test_a_dict_is_validated_as_a_file_is():
+    d = dict(GOOD, camera=dict(GOOD["camera"], look_at=[0, 0, 5]))
+    with pytest.raises(glint.SceneError) as e:
+        glint.Scene.from_dict(d)
+    assert str(e.value) == "<dict>: camera.look_at: equals camera.eye: no view direction"
+    assert (e.value.file, e.value.line, e.value.key) == ("<dict>", None, "camera.look_at")
+    with pytest.raises(glint.SceneError, match="spheres.0..radius: -1 must be finite and > 0"):
+        glint.render(dict(GOOD, spheres=[dict(GOOD["spheres"][0], radius=-1.0)]), backend="cpu")
+    with pytest.raises(glint.SceneError, match="unknown field `colour`"):
+        glint.Scene.from_dict(dict(GOOD, lights=[{"position": [0, 0, 0], "colour": [1, 1, 1]}]))
+    # The twin: the good dict renders.
+    assert glint.render(GOOD, backend="cpu").shape == (24, 32, 4)
+
+
+def test_toml_text_errors_name_the_line():
+    with pytest.raises(glint.SceneError) as e:
+        glint.Scene.from_toml("[camera]\nfov = 'wide'\n", base_dir="/tmp")
+    assert e.value.line == 2 and e.value.file.endswith("<toml>")
+
+
+def test_io_errors_are_os_errors(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        glint.Scene.load(tmp_path / "missing.toml")
+    with pytest.raises(FileNotFoundError):
+        glint.render(tmp_path / "missing.toml", backend="cpu")
+    with pytest.raises(glint.SceneError, match="meshes.0..file"):
+        glint.Scene.from_dict(dict(GOOD, meshes=[{"file": "missing.obj"}]), base_dir=tmp_path)
+
+
+@pytest.mark.parametrize("make", [
+    lambda: glint.Scene.load(SCENES / "whitted.toml"),
+    lambda: glint.Scene.from_toml((SCENES / "whitted.toml").read_text(), base_dir=SCENES),
+    lambda: glint.Scene.from_dict(glint.Scene.load(SCENES / "whitted.toml").to_dict(),
+                                  base_dir=SCENES),
+])
+def test_a_scene_pickles(make):
+    s = make()
+    t = pickle.loads(pickle.dumps(s))
+    assert type(t) is glint.Scene and t.path == s.path and t.triangles == s.triangles
+    assert same_bits(glint.render(s, backend="cpu", size=(48, 36)),
+                     glint.render(t, backend="cpu", size=(48, 36)))
+
+
+def test_a_scene_loads_with_the_cache(tmp_path):
+    s = glint.Scene.load(SCENES / "whitted.toml", cache=tmp_path / "cache")
+    t = pickle.loads(pickle.dumps(s))
+    assert same_bits(glint.render(s, backend="cpu", size=(32, 24)),
+                     glint.render(t, backend="cpu", size=(32, 24)))
