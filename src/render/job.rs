@@ -355,7 +355,7 @@ fn prepare(
     {
         return Err(RenderError::OverwritesScene(p.to_owned()));
     }
-    scene.validate()?;
+    crate::stages::time("checks", || scene.validate())?;
     for w in &scene.warnings {
         run.warn(Warning::Scene(w.clone()));
     }
