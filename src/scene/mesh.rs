@@ -1,4 +1,5 @@
-//! `[[meshes]]`: Wavefront OBJ through `tobj`, polygons triangulated, the material from the
+//! `[[meshes]]`: Wavefront OBJ (glint's reader, else `tobj`) and Stanford PLY
+//! ([`super::ply`]), polygons triangulated, the material from the
 //! scene or from the OBJ's MTL, then scale, rotate (x, then y, then z) and translate.
 
 use std::io::BufReader;
@@ -130,6 +131,12 @@ pub enum MeshError {
     /// No triangles.
     #[error("no triangles: the mesh is empty")]
     Empty,
+    /// A PLY file is wrong: its header line, or the element and its index.
+    #[error("{0}")]
+    Ply(super::PlyError),
+    /// A PLY mesh without `material =` (PLY files carry no materials).
+    #[error("a PLY file has no materials: name one with `material =`")]
+    PlyMaterial,
 }
 
 /// What is wrong with one triangle as the entry's transform places it.
@@ -305,6 +312,16 @@ pub(super) fn load(
         drop(raw);
         return entry.add_cached(name, hit, &mut out);
     }
+    if entry.is_ply() {
+        let Some(name) = &m.material else {
+            return Err(entry.fail(MeshError::PlyMaterial));
+        };
+        let bytes = inflate(&entry.obj_path, raw, v.limit).map_err(|e| entry.fail(e))?;
+        let parsed = crate::stages::time("PLY parse", || super::ply::parse(&bytes, entry.normals))
+            .map_err(|e| entry.fail(MeshError::Ply(e)))?;
+        drop(bytes);
+        return entry.add_parsed(name, parsed, &xf, cached, &mut out);
+    }
     let (mut bytes, early) = entry.unpack(raw)?;
     let t_check = std::time::Instant::now();
     // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
@@ -390,6 +407,12 @@ impl<'e> Entry<'e> {
                 Normals::Skip
             },
         }
+    }
+
+    /// Whether the entry's file is a PLY (`.ply` or `.ply.gz`, in any case).
+    fn is_ply(&self) -> bool {
+        let name = self.obj_path.to_string_lossy().to_ascii_lowercase();
+        name.ends_with(".ply") || name.ends_with(".ply.gz")
     }
 
     /// `error` as the scene's: naming the scene file, the line, the key and the mesh.
@@ -891,6 +914,25 @@ impl CachedMesh {
 
 /// The bytes of an OBJ file as read (`raw`), gunzipped (at most `limit` bytes) when the
 /// name ends in `.gz`.
+/// A binary file's bytes, inflated where its name ends in `.gz`, at most `limit` of them
+/// (unlike [`gunzip`], which refuses what no OBJ text holds).
+fn inflate(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> {
+    if path.extension().is_none_or(|e| e != "gz") {
+        return Ok(raw);
+    }
+    let _gunzip = Gunzip(std::time::Instant::now());
+    use std::io::Read;
+    let mut out = Vec::new();
+    flate2::read::GzDecoder::new(&raw[..])
+        .take(limit + 1)
+        .read_to_end(&mut out)
+        .map_err(MeshError::Gunzip)?;
+    if out.len() as u64 > limit {
+        return Err(MeshError::Unpacked { limit });
+    }
+    Ok(out)
+}
+
 fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> {
     let _gunzip = Gunzip(std::time::Instant::now());
     if path.extension().is_some_and(|e| e == "gz") {

@@ -5,6 +5,7 @@ mod error;
 mod format;
 mod mesh;
 mod obj;
+mod ply;
 pub mod range;
 mod validate;
 
@@ -16,6 +17,7 @@ pub use error::{SceneError, line_of};
 use format::{SceneFile, Vec3File};
 pub use mesh::{FaceError, MeshError};
 pub use obj::ObjError;
+pub use ply::PlyError;
 use toml::Spanned;
 
 /// The largest width or height accepted (the GPU renders larger frames in tiles).

@@ -251,8 +251,9 @@ use glint::scene::{Scene, TriangleAlgorithm};
 pub const SEED_SCENES: [&str; 5] = ["sphere", "triangle", "umbrella", "bb8", "mitsubishi"];
 
 /// Every scene in `scenes/` that needs no fetched mesh: the seed scenes, their shadowed,
-/// antialiased and mirrored variants and the Whitted scene (the README shows each).
-pub const SHIPPED_SCENES: [&str; 10] = [
+/// antialiased and mirrored variants, the Whitted scene and the PLY scene (the README shows
+/// each).
+pub const SHIPPED_SCENES: [&str; 11] = [
     "sphere",
     "triangle",
     "umbrella",
@@ -263,6 +264,7 @@ pub const SHIPPED_SCENES: [&str; 10] = [
     "bb8-aa",
     "whitted",
     "bb8-mirror",
+    "suzanne-ply",
 ];
 
 /// Writes into `dir` a scene of 30,000 small ambient triangles (`many.obj`, 1.44 MB of
