@@ -134,6 +134,9 @@ pub enum MeshError {
     /// A PLY file is wrong: its header line, or the element and its index.
     #[error("{0}")]
     Ply(super::PlyError),
+    /// A glTF file is wrong.
+    #[error("{0}")]
+    Gltf(super::GltfError),
     /// A PLY mesh without `material =` (PLY files carry no materials).
     #[error("a PLY file has no materials: name one with `material =`")]
     PlyMaterial,
@@ -322,6 +325,14 @@ pub(super) fn load(
         drop(bytes);
         return entry.add_parsed(name, parsed, &xf, cached, &mut out);
     }
+    if entry.is_gltf() {
+        let g = crate::stages::time("glTF parse", || {
+            super::gltf::read(&raw, &entry.obj_path, v.read, entry.normals)
+        })
+        .map_err(|e| entry.fail(MeshError::Gltf(e)))?;
+        drop(raw);
+        return entry.add_gltf(g, &xf, cached, &mut out);
+    }
     let (mut bytes, early) = entry.unpack(raw)?;
     let t_check = std::time::Instant::now();
     // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
@@ -413,6 +424,68 @@ impl<'e> Entry<'e> {
     fn is_ply(&self) -> bool {
         let name = self.obj_path.to_string_lossy().to_ascii_lowercase();
         name.ends_with(".ply") || name.ends_with(".ply.gz")
+    }
+
+    /// Whether the entry's file is a glTF (`.gltf` or `.glb`, in any case).
+    fn is_gltf(&self) -> bool {
+        let name = self.obj_path.to_string_lossy().to_ascii_lowercase();
+        name.ends_with(".gltf") || name.ends_with(".glb")
+    }
+
+    /// A glTF's triangles: all of the material the entry names, else each of its glTF
+    /// material (added to the scene's, named `file#k:name`: diffuse, ka = kd = the base
+    /// colour). Cached like an OBJ where the file holds its buffers and the entry names
+    /// the material.
+    fn add_gltf(
+        &self,
+        g: super::gltf::GltfMesh,
+        xf: &Transform,
+        cached: Option<(&Arc<Cache>, Key)>,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let (path, line, key) = (self.v.path.display(), self.line, &self.key);
+        for w in &g.warnings {
+            out.warnings.push(format!(
+                "{path}:{line}: {key}: {}: {w}",
+                self.obj_path.display()
+            ));
+        }
+        if let Some(name) = &self.m.material {
+            let cached = cached.filter(|_| g.self_contained);
+            return self.add_parsed(name, g.parsed, xf, cached, out);
+        }
+        let base = out.materials.len() as u32;
+        for (k, (name, c)) in g.materials.iter().enumerate() {
+            if c.iter()
+                .any(|x| !x.is_finite() || *x < 0.0 || *x > super::MAX_COLOUR)
+            {
+                return Err(self.fail(MeshError::MtlValue { name: name.clone() }));
+            }
+            out.materials.push(Material {
+                name: format!("{}#{k}:{name}", self.m.file.get_ref()),
+                model: Model::Diffuse,
+                ka: *c,
+                kd: *c,
+                ks: [0.0; 3],
+                n: 0.0,
+                optics: super::Optics::default(),
+            });
+        }
+        let mut placed = crate::stages::time("transform", || place_parsed(&g.parsed, xf, base))
+            .map_err(|e| self.fail(e))?;
+        for (t, m) in placed.iter_mut().zip(&g.triangle_material) {
+            t.material = base + m;
+        }
+        let corner = match self.normals {
+            Normals::Read => Some(
+                crate::stages::time("normals", || corner_normals(&g.parsed, xf))
+                    .map_err(|e| self.fail(e))?,
+            ),
+            Normals::Skip => None,
+        };
+        let before = out.triangles.len();
+        out.triangles.extend(placed);
+        self.complete(before, None, corner, out)
     }
 
     /// `error` as the scene's: naming the scene file, the line, the key and the mesh.

@@ -3,6 +3,7 @@
 
 mod error;
 mod format;
+mod gltf;
 mod mesh;
 mod obj;
 mod ply;
@@ -15,6 +16,7 @@ use std::sync::Arc;
 
 pub use error::{SceneError, line_of};
 use format::{SceneFile, Vec3File};
+pub use gltf::GltfError;
 pub use mesh::{FaceError, MeshError};
 pub use obj::ObjError;
 pub use ply::PlyError;
