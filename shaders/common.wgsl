@@ -42,6 +42,9 @@ override SMOOTH: bool = false;
 override ANTIALIAS: bool = false;
 /// Some material reflects or transmits (kr or kt) and `max_depth` > 0: secondary rays.
 override WHITTED: bool = false;
+/// Some light is directional or a spot (else every light is a point light, and `shade`
+/// compiles only that).
+override LIGHT_KINDS: bool = false;
 
 // ---- constants (each one's story is in `src/buffers.rs`) ------------------------------
 
@@ -140,10 +143,16 @@ struct Material {
 
 struct Light {
     position: vec3<f32>,
-    _pad0: u32,
+    kind: u32,
     color: vec3<f32>,
-    _pad1: u32,
+    cos_outer: f32,
+    direction: vec3<f32>,
+    cos_inner: f32,
 }
+
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_DIRECTIONAL: u32 = 1u;
+const LIGHT_SPOT: u32 = 2u;
 
 struct RayIn {
     origin: vec3<f32>,

@@ -303,6 +303,20 @@ fn shadow_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return p + n * (scale * SHADOW_EPSILON * 64.0);
 }
 
+/// A spot light's weight for a point whose direction from the light makes cosine `c` with
+/// the spot's axis: 0 at or beyond `cos_outer`, 1 from `cos_inner` in, and between them
+/// the smoothstep s²(3 − 2s) of s = (c − cos_outer) / (cos_inner − cos_outer).
+fn spot_factor(light: Light, c: f32) -> f32 {
+    if !(c > light.cos_outer) {
+        return 0.0;
+    }
+    if c >= light.cos_inner {
+        return 1.0;
+    }
+    let s = (c - light.cos_outer) / (light.cos_inner - light.cos_outer);
+    return s * s * (3.0 - 2.0 * s);
+}
+
 /// The Phong model (README, "Scene format") at a hit: I = Ia·ka + Σ Ip·kd·max(0, N·L) + Ip·ks·max(0, R·V)^n,
 /// each term only if the material's model has it, clamped to [0, 1]. A term below the
 /// smallest normal f32 is 0 (`flush`), so that drivers that flush subnormals agree.
@@ -323,24 +337,42 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
         let v = normalize(-ray.dir);
         for (var k = 0u; k < params.n_lights; k = k + 1u) {
             let light = lights[k];
-            let to_light = light.position - p;
+            var to_light = light.position - p;
+            if LIGHT_KINDS && light.kind == LIGHT_DIRECTIONAL {
+                to_light = -light.direction;
+            }
             let l = normalize(to_light);
             let ndl = dot(sh.n, l);
             if !(ndl > 0.0) {
                 continue;
             }
-            if SHADOWS {
-                let o = shadow_origin(sh.p, n);
-                let d = light.position - o;
-                if occluded(Ray(o, d), 0.0, 1.0, hit.prim) {
+            var ip = light.color;
+            if LIGHT_KINDS && light.kind == LIGHT_SPOT {
+                let s = spot_factor(light, -dot(l, light.direction));
+                if !(s > 0.0) {
                     continue;
                 }
+                ip = ip * s;
             }
-            color = color + flush3(light.color * m.kd * ndl);
+            if SHADOWS {
+                let o = shadow_origin(sh.p, n);
+                if LIGHT_KINDS && light.kind == LIGHT_DIRECTIONAL {
+                    // Towards the light without end.
+                    if occluded(Ray(o, l), 0.0, INFINITY, hit.prim) {
+                        continue;
+                    }
+                } else {
+                    let d = light.position - o;
+                    if occluded(Ray(o, d), 0.0, 1.0, hit.prim) {
+                        continue;
+                    }
+                }
+            }
+            color = color + flush3(ip * m.kd * ndl);
             if USES_PHONG && m.model == MODEL_PHONG {
                 let r = sh.n * (2.0 * ndl) - l;
                 let rv = max0(dot(r, v));
-                color = color + flush3(light.color * m.ks * phong_power(rv, m));
+                color = color + flush3(ip * m.ks * phong_power(rv, m));
             }
         }
     }

@@ -142,15 +142,7 @@ impl SceneBuffers {
                 ..Sphere::default()
             })
             .collect();
-        let lights = scene
-            .lights
-            .iter()
-            .map(|l| Light {
-                position: l.position,
-                color: flush_colour(l.color),
-                ..Light::default()
-            })
-            .collect();
+        let lights = scene.lights.iter().map(light).collect();
         crate::stages::record("flatten", t_flat.elapsed());
         SceneBuffers {
             normals,
@@ -288,6 +280,8 @@ pub struct Specialisation {
     /// WGSL `WHITTED`: some material has kr or kt and `params.max_depth` > 0, so secondary
     /// rays are traced.
     pub whitted: bool,
+    /// WGSL `LIGHT_KINDS`: some light is directional or a spot.
+    pub light_kinds: bool,
 }
 
 /// Scenes with at most this many primitives are traced by testing every primitive: a
@@ -312,6 +306,7 @@ impl Specialisation {
                     .materials
                     .iter()
                     .any(|m| m.kr.iter().chain(&m.kt).any(|&k| k > 0.0)),
+            light_kinds: buf.lights.iter().any(|l| l.kind != LIGHT_POINT),
         }
     }
 
@@ -331,6 +326,7 @@ impl Specialisation {
             smooth: true,
             antialias: true,
             whitted: true,
+            light_kinds: true,
         }
     }
 
@@ -340,7 +336,7 @@ impl Specialisation {
     }
 
     /// The `(name, value)` pairs for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 10] {
+    pub fn constants(&self) -> [(&'static str, f64); 11] {
         let b = |x: bool| if x { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -353,7 +349,40 @@ impl Specialisation {
             ("SMOOTH", b(self.smooth)),
             ("ANTIALIAS", b(self.antialias)),
             ("WHITTED", b(self.whitted)),
+            ("LIGHT_KINDS", b(self.light_kinds)),
         ]
+    }
+}
+
+/// A scene light as the shader reads it: the direction made a unit vector and a spot's
+/// angles made cosines, in f64, each rounded once to f32.
+fn light(l: &crate::scene::Light) -> Light {
+    use crate::scene::LightKind;
+    let unit = |d: [f32; 3]| {
+        let v = glam::DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
+        (v / v.length()).as_vec3().to_array()
+    };
+    let (kind, direction, cos_outer, cos_inner) = match l.kind {
+        LightKind::Point => (LIGHT_POINT, [0.0; 3], 0.0, 0.0),
+        LightKind::Directional { direction } => (LIGHT_DIRECTIONAL, unit(direction), 0.0, 0.0),
+        LightKind::Spot {
+            direction,
+            angle,
+            falloff,
+        } => (
+            LIGHT_SPOT,
+            unit(direction),
+            (angle as f64).to_radians().cos() as f32,
+            ((angle - falloff) as f64).to_radians().cos() as f32,
+        ),
+    };
+    Light {
+        position: l.position,
+        kind,
+        color: flush_colour(l.color),
+        cos_outer,
+        direction,
+        cos_inner,
     }
 }
 

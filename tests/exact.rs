@@ -44,6 +44,7 @@ fn specialisations() -> [Specialisation; 2] {
         smooth: true,
         antialias: true,
         whitted: true,
+        light_kinds: true,
     };
     let lean = Specialisation {
         has_triangles: false,
@@ -53,6 +54,7 @@ fn specialisations() -> [Specialisation; 2] {
         smooth: false,
         antialias: false,
         whitted: false,
+        light_kinds: false,
         ..all
     };
     [all, lean]

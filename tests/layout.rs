@@ -116,7 +116,12 @@ fn shared_structs_match_wgsl() {
         [ka, model, kd, n, ks, n_int, kr, ior, kt, fresnel]
     );
     check_struct!(&m, BvhNode, "BvhNode", [lo, first, hi, count_axis]);
-    check_struct!(&m, Light, "Light", [position, _pad0, color, _pad1]);
+    check_struct!(
+        &m,
+        Light,
+        "Light",
+        [position, kind, color, cos_outer, direction, cos_inner]
+    );
     check_struct!(&m, RayIn, "RayIn", [origin, t_min, dir, t_max]);
     check_struct!(&m, HitOut, "HitOut", [t, prim, u, v]);
 }
@@ -196,6 +201,7 @@ fn shader_constants_match_rust() {
         smooth: true,
         antialias: true,
         whitted: true,
+        light_kinds: true,
     };
     for (name, _) in spec.constants() {
         assert!(

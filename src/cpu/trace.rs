@@ -14,6 +14,7 @@ use super::prims::{
 use crate::buffers::{
     BvhNode, HitOut, Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, RayIn, TRIANGLE_BIT,
 };
+use crate::shared::layout::{LIGHT_DIRECTIONAL, LIGHT_SPOT};
 use crate::shared::real::{Real, V3};
 
 // ---- the camera ------------------------------------------------------------------------
@@ -372,6 +373,22 @@ pub fn shadow_origin<R: Real>(p: V3<R>, n: V3<R>) -> V3<R> {
     p + n * (scale * R::EPSILON * sixty_four)
 }
 
+/// WGSL `spot_factor`: a spot light's weight at cosine `c` from its axis, 0 at or beyond
+/// `cos_outer`, 1 from `cos_inner` in, the smoothstep s²(3 − 2s) between.
+pub fn spot_factor<R: Real>(light: &Light, c: R) -> R {
+    let outer = R::from_f32(light.cos_outer);
+    let inner = R::from_f32(light.cos_inner);
+    if !(c > outer) {
+        return R::ZERO;
+    }
+    if c >= inner {
+        return R::ONE;
+    }
+    let s = (c - outer) / (inner - outer);
+    let two = R::ONE + R::ONE;
+    s * s * (two + R::ONE - two * s)
+}
+
 /// WGSL `shade`: the Phong model (README, "Scene format") at a hit, each term only where the model has it.
 pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
     let m: &Material = &g.buf.materials[prim_material(g, hit) as usize];
@@ -389,25 +406,43 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
             let light: &Light = &g.buf.lights[k as usize];
             let position = V3::from_f32(light.position);
             let light_color = V3::from_f32(light.color);
-            let to_light = position - p;
+            let mut to_light = position - p;
+            if g.spec.light_kinds && light.kind == LIGHT_DIRECTIONAL {
+                to_light = -V3::from_f32(light.direction);
+            }
             let l = to_light.normalize();
             let ndl = sh.n.dot(l);
             if !(ndl > R::ZERO) {
                 continue;
             }
-            if g.spec.shadows {
-                let o = shadow_origin(sh.p, n);
-                let d = position - o;
-                if occluded(g, Ray { origin: o, dir: d }, R::ZERO, R::ONE, hit.prim) {
+            let mut ip = light_color;
+            if g.spec.light_kinds && light.kind == LIGHT_SPOT {
+                let s = spot_factor(light, -l.dot(V3::from_f32(light.direction)));
+                if !(s > R::ZERO) {
                     continue;
                 }
+                ip = ip * s;
             }
-            color = color + flush3(light_color * V3::from_f32(m.kd) * ndl);
+            if g.spec.shadows {
+                let o = shadow_origin(sh.p, n);
+                if g.spec.light_kinds && light.kind == LIGHT_DIRECTIONAL {
+                    // Towards the light without end.
+                    if occluded(g, Ray { origin: o, dir: l }, R::ZERO, R::INFINITY, hit.prim) {
+                        continue;
+                    }
+                } else {
+                    let d = position - o;
+                    if occluded(g, Ray { origin: o, dir: d }, R::ZERO, R::ONE, hit.prim) {
+                        continue;
+                    }
+                }
+            }
+            color = color + flush3(ip * V3::from_f32(m.kd) * ndl);
             if g.spec.uses_phong && m.model == MODEL_PHONG {
                 let two = R::ONE + R::ONE;
                 let r = sh.n * (two * ndl) - l;
                 let rv = max0(r.dot(v));
-                color = color + flush3(light_color * V3::from_f32(m.ks) * phong_power(rv, m));
+                color = color + flush3(ip * V3::from_f32(m.ks) * phong_power(rv, m));
             }
         }
     }

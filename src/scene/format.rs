@@ -69,8 +69,16 @@ pub struct CameraFile {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightFile {
-    /// Position.
-    pub position: Vec3File,
+    /// `point` (the default), `directional` or `spot`.
+    pub kind: Option<Spanned<String>>,
+    /// Position (point and spot lights).
+    pub position: Option<Vec3File>,
+    /// Where the light shines (directional and spot lights).
+    pub direction: Option<Vec3File>,
+    /// A spot's half-angle, degrees.
+    pub angle: Option<Spanned<f32>>,
+    /// A spot's soft edge, degrees inside `angle`.
+    pub falloff: Option<Spanned<f32>>,
     /// Ip.
     pub color: Vec3File,
 }

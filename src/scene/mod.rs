@@ -117,10 +117,37 @@ pub struct Camera {
     pub samples: u32,
 }
 
-/// A point light.
+/// What kind of light, and its geometry beyond the position.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum LightKind {
+    /// A point light at `Light::position`, shining every way (the default).
+    #[default]
+    Point,
+    /// A light at infinity shining along `direction` (any length but zero): the same
+    /// direction at every point, and shadow rays that go on without end.
+    Directional {
+        /// Where the light travels.
+        direction: [f32; 3],
+    },
+    /// A point light at `Light::position` shining along `direction` within `angle`
+    /// degrees of it: full within `angle − falloff`, none beyond `angle`, and between the
+    /// two a smoothstep in the cosine (README, "Lights").
+    Spot {
+        /// The spot's axis (any length but zero).
+        direction: [f32; 3],
+        /// The half-angle, degrees, in (0, 90].
+        angle: f32,
+        /// The soft edge, degrees, in [0, angle].
+        falloff: f32,
+    },
+}
+
+/// A light.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Light {
-    /// Position.
+    /// What kind of light it is.
+    pub kind: LightKind,
+    /// Position (unused by a directional light).
     pub position: [f32; 3],
     /// Colour Ip.
     pub color: [f32; 3],
@@ -625,10 +652,7 @@ impl Validator<'_> {
         let mut lights = Vec::new();
         for (i, l) in f.lights.iter().enumerate() {
             let l = l.get_ref();
-            lights.push(Light {
-                position: self.finite3(&l.position, &format!("lights[{i}].position"))?,
-                color: self.colour(&l.color, &format!("lights[{i}].color"))?,
-            });
+            lights.push(self.light(i, l)?);
         }
 
         let mut materials = Vec::new();
@@ -740,6 +764,84 @@ impl Validator<'_> {
             sphere_sources,
             triangle_sources,
             cache: self.cache.cloned(),
+        })
+    }
+
+    /// `[[lights]]` entry `i`: the keys its kind needs, and no others.
+    fn light(&self, i: usize, l: &format::LightFile) -> Result<Light, SceneError> {
+        let key = |k: &str| format!("lights[{i}].{k}");
+        let kind_name = l.kind.as_ref().map_or("point", |k| k.get_ref().as_str());
+        let kind_span = l.kind.as_ref().map_or(l.color.span(), |k| k.span());
+        let needs = |present: bool, k: &str, wanted: bool| -> Result<(), SceneError> {
+            match (present, wanted) {
+                (false, true) => self.err(
+                    kind_span.clone(),
+                    &key(k),
+                    format!("missing: a {kind_name} light needs it"),
+                ),
+                (true, false) => self.err(
+                    kind_span.clone(),
+                    &key(k),
+                    format!("a {kind_name} light has none"),
+                ),
+                _ => Ok(()),
+            }
+        };
+        let (point, dir, spot) = match kind_name {
+            "point" => (true, false, false),
+            "directional" => (false, true, false),
+            "spot" => (true, true, true),
+            other => {
+                return self.err(
+                    kind_span,
+                    &key("kind"),
+                    format!("unknown kind {other:?}: expected point, directional or spot"),
+                );
+            }
+        };
+        needs(l.position.is_some(), "position", point)?;
+        needs(l.direction.is_some(), "direction", dir)?;
+        needs(l.angle.is_some(), "angle", spot)?;
+        if !spot && l.falloff.is_some() {
+            needs(true, "falloff", false)?;
+        }
+        let position = match &l.position {
+            Some(v) => self.finite3(v, &key("position"))?,
+            None => [0.0; 3],
+        };
+        let direction = match &l.direction {
+            Some(v) => self.check(
+                *v.get_ref(),
+                v.span(),
+                &key("direction"),
+                validate::direction,
+            )?,
+            None => [0.0; 3],
+        };
+        let kind = match (dir, spot) {
+            (false, _) => LightKind::Point,
+            (true, false) => LightKind::Directional { direction },
+            (true, true) => {
+                let a = l.angle.as_ref().expect("checked above");
+                let angle =
+                    self.check(*a.get_ref(), a.span(), &key("angle"), validate::spot_angle)?;
+                let falloff = match &l.falloff {
+                    Some(f) => self.check(*f.get_ref(), f.span(), &key("falloff"), |x| {
+                        validate::spot_falloff(x, angle)
+                    })?,
+                    None => 0.0,
+                };
+                LightKind::Spot {
+                    direction,
+                    angle,
+                    falloff,
+                }
+            }
+        };
+        Ok(Light {
+            kind,
+            position,
+            color: self.colour(&l.color, &key("color"))?,
         })
     }
 

@@ -92,6 +92,31 @@ pub(super) fn view(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> Result<(),
     Ok(())
 }
 
+/// A light's direction: finite and not zero.
+pub(super) fn direction(d: [f32; 3]) -> Result<[f32; 3], String> {
+    finite3(d)?;
+    if d.iter().all(|&x| x == 0.0) {
+        return Err(format!("{d:?} has no direction"));
+    }
+    Ok(d)
+}
+
+/// A spot's half-angle, degrees, in (0, 90].
+pub(super) fn spot_angle(a: f32) -> Result<f32, String> {
+    if !(a > 0.0 && a <= 90.0) {
+        return Err(format!("{a} must be in (0, 90] degrees"));
+    }
+    Ok(a)
+}
+
+/// A spot's soft edge, degrees, in [0, angle].
+pub(super) fn spot_falloff(f: f32, angle: f32) -> Result<f32, String> {
+    if !(f >= 0.0 && f <= angle) {
+        return Err(format!("{f} must be in [0, angle = {angle}] degrees"));
+    }
+    Ok(f)
+}
+
 /// A sphere's radius, finite and > 0.
 pub(super) fn radius(r: f32) -> Result<f32, String> {
     if !(r.is_finite() && r > 0.0) {
@@ -179,6 +204,21 @@ impl Scene {
         for (i, l) in self.lights.iter().enumerate() {
             finite3(l.position).map_err(at(&format!("lights[{i}].position")))?;
             colour(l.color).map_err(at(&format!("lights[{i}].color")))?;
+            match l.kind {
+                super::LightKind::Point => {}
+                super::LightKind::Directional { direction: d } => {
+                    direction(d).map_err(at(&format!("lights[{i}].direction")))?;
+                }
+                super::LightKind::Spot {
+                    direction: d,
+                    angle,
+                    falloff,
+                } => {
+                    direction(d).map_err(at(&format!("lights[{i}].direction")))?;
+                    spot_angle(angle).map_err(at(&format!("lights[{i}].angle")))?;
+                    spot_falloff(falloff, angle).map_err(at(&format!("lights[{i}].falloff")))?;
+                }
+            }
         }
         for m in &self.materials {
             let key = |k: &str| format!("materials.{}.{k}", m.name);

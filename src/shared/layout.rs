@@ -224,18 +224,30 @@ pub struct Material {
     pub fresnel: u32,
 }
 
-/// A point light. Must match WGSL `struct Light` (32 bytes).
+/// [`Light::kind`] of a point light.
+pub const LIGHT_POINT: u32 = 0;
+/// [`Light::kind`] of a directional light.
+pub const LIGHT_DIRECTIONAL: u32 = 1;
+/// [`Light::kind`] of a spot light.
+pub const LIGHT_SPOT: u32 = 2;
+
+/// A light. Must match WGSL `struct Light` (48 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {
-    /// Position. Offset 0.
+    /// Position (point and spot lights). Offset 0.
     pub position: [f32; 3],
-    /// Offset 12.
-    pub _pad0: u32,
+    /// `LIGHT_POINT`, `LIGHT_DIRECTIONAL` or `LIGHT_SPOT`. Offset 12.
+    pub kind: u32,
     /// Colour, Ip. Offset 16.
     pub color: [f32; 3],
-    /// Offset 28.
-    pub _pad1: u32,
+    /// A spot's cosine of its angle: no light at or beyond it. Offset 28.
+    pub cos_outer: f32,
+    /// The unit direction the light travels (directional and spot lights; zero for a
+    /// point light). Offset 32.
+    pub direction: [f32; 3],
+    /// A spot's cosine of its angle less its falloff: full light from it in. Offset 44.
+    pub cos_inner: f32,
 }
 
 /// A ray for the `query` entry point. Must match WGSL `struct RayIn` (32 bytes).
