@@ -131,7 +131,11 @@ fn packet_rows_into(
     const PW: usize = packet::PACKET_W as usize;
     let (pw, ph) = (PW, packet::PACKET_H as usize);
     let band = ph * w as usize;
-    let trace = packet::tracer(simd);
+    let trace: packet::PacketFn = if g.spec.light_kinds {
+        packet::trace_packet_mirror
+    } else {
+        packet::tracer(simd)
+    };
     pixels
         .par_chunks_mut(band)
         .enumerate()

@@ -94,6 +94,23 @@ pub fn trace_packet(g: &Globals<f32>, i: u32, j: u32, simd: Simd) -> [[f32; 4]; 
     tracer(simd)(g, i, j)
 }
 
+/// The mirror's own `trace_pixel` for each pixel of the block, in a packet's lanes: what
+/// the packet tracer is for scenes with directional or spot lights, which only the mirror
+/// shades (so the packet path of every other scene is compiled as it was).
+pub fn trace_packet_mirror(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
+    let mut out = [[0.0f32; 4]; LANES];
+    for (l, px) in out.iter_mut().enumerate() {
+        let (x, y) = (
+            i + (l % PACKET_W as usize) as u32,
+            j + (l / PACKET_W as usize) as u32,
+        );
+        if x < g.cam.width && y < g.cam.height {
+            *px = crate::cpu::trace::trace_pixel(g, x, y);
+        }
+    }
+    out
+}
+
 /// A packet tracer: [`trace_packet`] of one build.
 pub type PacketFn = fn(&Globals<f32>, u32, u32) -> [[f32; 4]; LANES];
 

@@ -708,20 +708,6 @@ pub(super) fn shade_lanes<B: Build, O: Origins>(
     if mask == 0 {
         return color;
     }
-    if g.spec.light_kinds {
-        // Directional and spot lights are shaded lane by lane by the mirror's own `shade`
-        // (the same rays and hits, so the same bits); only scenes with such lights pay.
-        for l in (0..LANES).filter(|&l| (mask >> l) & 1 != 0) {
-            let o = origins.at(l);
-            let ray = Ray {
-                origin: V3::new(o[0], o[1], o[2]),
-                dir: V3::new(dir[0][l], dir[1][l], dir[2][l]),
-            };
-            let c = crate::cpu::trace::shade(g, ray, &found.hit(l));
-            [color[0][l], color[1][l], color[2][l]] = [c.x, c.y, c.z];
-        }
-        return color;
-    }
     let first = mask.trailing_zeros() as usize;
     let src = |l: usize| if (mask >> l) & 1 != 0 { l } else { first };
     // The hit triangle, from where the traversal read it when it can (a cache hit).
