@@ -13,10 +13,10 @@ use crate::shared::real::{Real, V3};
 
 /// WGSL `WHITTED_STACK`: the most rays waiting at once (max_depth + 1 for the largest
 /// max_depth, 16).
-pub const WHITTED_STACK: usize = 17;
+pub const WHITTED_STACK: usize = crate::shared::layout::WHITTED_STACK as usize;
 
 /// The largest `max_depth` a scene may ask for (the stack holds max_depth + 1 rays).
-pub const MAX_DEPTH: u32 = WHITTED_STACK as u32 - 1;
+pub const MAX_DEPTH: u32 = crate::shared::layout::MAX_WHITTED_DEPTH;
 
 /// WGSL `Pending`: a secondary ray waiting on the stack.
 #[derive(Clone, Copy, Debug)]

@@ -203,7 +203,7 @@ impl Default for Optics {
 pub const DEFAULT_MAX_DEPTH: u32 = 5;
 
 /// The largest `max_depth` (the shader's stack holds max_depth + 1 rays).
-pub const MAX_DEPTH: u32 = crate::cpu::whitted::MAX_DEPTH;
+pub const MAX_DEPTH: u32 = crate::shared::layout::MAX_WHITTED_DEPTH;
 
 /// The default `min_weight`, 1/255 (POV-Ray's adaptive depth control): a secondary ray
 /// whose weight's largest channel is below it is not traced.

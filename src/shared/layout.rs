@@ -29,6 +29,12 @@ pub const FLAT: u32 = 0;
 /// The largest `samples` per pixel side (`[camera] samples`): 16×16 = 256 rays a pixel.
 pub const MAX_SAMPLES: u32 = 16;
 
+/// WGSL `WHITTED_STACK` (`shaders/whitted.wgsl`): the most secondary rays waiting at once.
+pub const WHITTED_STACK: u32 = 17;
+
+/// The largest `max_depth` a scene may ask for: the stack holds max_depth + 1 rays.
+pub const MAX_WHITTED_DEPTH: u32 = WHITTED_STACK - 1;
+
 /// `Hit::prim` of a miss.
 pub const PRIM_NONE: u32 = 0xffff_ffff;
 /// Set in `Hit::prim` when the index is a triangle's (else it is a sphere's).
