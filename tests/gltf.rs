@@ -280,6 +280,24 @@ fn gltf_transforms_and_materials() {
         .unwrap() as u32;
     assert_eq!(s.triangles[0].material, first);
     assert_eq!(s.triangles[f.len() - 1].material, first + 1);
+    // A base colour the scene's colour check refuses, when the scene takes the file's
+    // materials.
+    let (json, bin) = document(
+        &v,
+        &f,
+        Width::U32,
+        "",
+        &[[-0.5, 0.0, 0.0], colours[1]],
+        None,
+    );
+    std::fs::write(dir.join("neg.glb"), glb(&json, &bin)).unwrap();
+    let e = scene(&dir, "neg.glb", false).unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "glTF material 0 (\"m0\"): baseColorFactor [-0.5, 0.0, 0.0] has a negative component"
+        ),
+        "{e}"
+    );
     // With `material =` every triangle is the scene's.
     let s = scene(&dir, "x.glb", true).unwrap();
     assert!(

@@ -45,7 +45,11 @@ pub fn from_scene_error(py: Python<'_>, e: &glint::scene::SceneError, dict_sourc
     use glint::scene::SceneError as E;
     match e {
         E::Io { file, error } => os_error(file, error),
-        E::Syntax { key, message, .. } | E::Invalid { key, message, .. } if dict_source => {
+        E::Syntax { key, message, .. }
+        | E::Invalid { key, message, .. }
+        | E::Value { key, message, .. }
+            if dict_source =>
+        {
             scene_error(
                 py,
                 format!("<dict>: {key}: {message}"),
@@ -54,13 +58,6 @@ pub fn from_scene_error(py: Python<'_>, e: &glint::scene::SceneError, dict_sourc
                 Some(key.clone()),
             )
         }
-        E::Value { key, message, .. } if dict_source => scene_error(
-            py,
-            format!("<dict>: {key}: {message}"),
-            Some("<dict>".into()),
-            None,
-            Some(key.clone()),
-        ),
         E::Syntax { file, .. }
         | E::Invalid { file, .. }
         | E::Value { file, .. }

@@ -58,6 +58,16 @@ pub enum GltfError {
         /// What is wrong.
         message: String,
     },
+    /// A material's base colour is out of the scene's colour domain.
+    #[error("glTF material {index} ({name:?}): baseColorFactor {message}")]
+    Material {
+        /// The material's index.
+        index: usize,
+        /// Its name (or `materialK`).
+        name: String,
+        /// What is wrong, as for a scene colour.
+        message: String,
+    },
     /// No scene to draw.
     #[error("glTF: the file has no scene")]
     NoScene,

@@ -420,16 +420,20 @@ impl<'e> Entry<'e> {
         }
     }
 
+    /// Whether the entry's file name ends in one of `endings` (lower case), in any case.
+    fn named(&self, endings: &[&str]) -> bool {
+        let name = self.obj_path.to_string_lossy().to_ascii_lowercase();
+        endings.iter().any(|e| name.ends_with(e))
+    }
+
     /// Whether the entry's file is a PLY (`.ply` or `.ply.gz`, in any case).
     fn is_ply(&self) -> bool {
-        let name = self.obj_path.to_string_lossy().to_ascii_lowercase();
-        name.ends_with(".ply") || name.ends_with(".ply.gz")
+        self.named(&[".ply", ".ply.gz"])
     }
 
     /// Whether the entry's file is a glTF (`.gltf` or `.glb`, in any case).
     fn is_gltf(&self) -> bool {
-        let name = self.obj_path.to_string_lossy().to_ascii_lowercase();
-        name.ends_with(".gltf") || name.ends_with(".glb")
+        self.named(&[".gltf", ".glb"])
     }
 
     /// A glTF's triangles: all of the material the entry names, else each of its glTF
@@ -456,11 +460,14 @@ impl<'e> Entry<'e> {
         }
         let base = out.materials.len() as u32;
         for (k, (name, c)) in g.materials.iter().enumerate() {
-            if c.iter()
-                .any(|x| !x.is_finite() || *x < 0.0 || *x > super::MAX_COLOUR)
-            {
-                return Err(self.fail(MeshError::MtlValue { name: name.clone() }));
-            }
+            // The scene's own colour check, for the materials the scene takes from the file.
+            super::validate::colour(*c).map_err(|message| {
+                self.fail(MeshError::Gltf(super::GltfError::Material {
+                    index: k,
+                    name: name.clone(),
+                    message,
+                }))
+            })?;
             out.materials.push(Material {
                 name: format!("{}#{k}:{name}", self.m.file.get_ref()),
                 model: Model::Diffuse,
@@ -471,21 +478,7 @@ impl<'e> Entry<'e> {
                 optics: super::Optics::default(),
             });
         }
-        let mut placed = crate::stages::time("transform", || place_parsed(&g.parsed, xf, base))
-            .map_err(|e| self.fail(e))?;
-        for (t, m) in placed.iter_mut().zip(&g.triangle_material) {
-            t.material = base + m;
-        }
-        let corner = match self.normals {
-            Normals::Read => Some(
-                crate::stages::time("normals", || corner_normals(&g.parsed, xf))
-                    .map_err(|e| self.fail(e))?,
-            ),
-            Normals::Skip => None,
-        };
-        let before = out.triangles.len();
-        out.triangles.extend(placed);
-        self.complete(before, None, corner, out)
+        self.add_placed(g.parsed, xf, base, Some(&g.triangle_material), None, out)
     }
 
     /// `error` as the scene's: naming the scene file, the line, the key and the mesh.
@@ -570,8 +563,29 @@ impl<'e> Entry<'e> {
         out: &mut Out<'_>,
     ) -> Result<(), SceneError> {
         let material = self.material(name, out.materials)?;
-        let placed = crate::stages::time("transform", || place_parsed(&parsed, xf, material))
+        self.add_placed(parsed, xf, material, None, cached, out)
+    }
+
+    /// `parsed`'s triangles placed by `xf`, each of `material`, or of `material` plus its
+    /// entry in `per_triangle` (a glTF's own materials, appended to the scene's from
+    /// `material` on); its corner normals computed when it is smooth, and stored in
+    /// `cached` when it is worth it.
+    fn add_placed(
+        &self,
+        parsed: Parsed,
+        xf: &Transform,
+        material: u32,
+        per_triangle: Option<&[u32]>,
+        cached: Option<(&Arc<Cache>, Key)>,
+        out: &mut Out<'_>,
+    ) -> Result<(), SceneError> {
+        let mut placed = crate::stages::time("transform", || place_parsed(&parsed, xf, material))
             .map_err(|e| self.fail(e))?;
+        if let Some(own) = per_triangle {
+            for (t, m) in placed.iter_mut().zip(own) {
+                t.material = material + m;
+            }
+        }
         let corner = match self.normals {
             Normals::Read => Some(
                 crate::stages::time("normals", || corner_normals(&parsed, xf))
