@@ -1,10 +1,11 @@
-// glint's kernel, part 1 of 4: what the parts share. The override constants, the
+// glint's kernel, part 1 of 5: what the parts share. The override constants, the
 // constants, the structs shared with Rust and their bindings, the ray and hit records and
 // the small helpers.
 //
-// The kernel is `common.wgsl` + `prims.wgsl` + `trace.wgsl` + `whitted.wgsl`, joined in that order at build
-// time (`src/gpu/mod.rs`, `SHADER_SOURCE`). Each part has its mirror in `src/cpu/` with the
-// same stem (`common.rs`, `prims.rs`, `trace.rs`, `whitted.rs`): every function, with the same name, in
+// The kernel is `common.wgsl` + `prims.wgsl` + `texture.wgsl` + `trace.wgsl` + `whitted.wgsl`,
+// joined in that order at build time (`src/gpu/mod.rs`, `SHADER_SOURCE`). Each part has its
+// mirror in `src/cpu/` with the same stem (`common.rs`, `prims.rs`, `texture.rs`, `trace.rs`,
+// `whitted.rs`): every function, with the same name, in
 // the same order, with the same operations in the same order. Change both in one commit;
 // the GPU-against-CPU tests catch the one that was forgotten.
 //
@@ -45,6 +46,9 @@ override WHITTED: bool = false;
 /// Some light is directional or a spot (else every light is a point light, and `shade`
 /// compiles only that).
 override LIGHT_KINDS: bool = false;
+/// Some triangle is textured (`uvs`, `textures`, `texels`): else `textured` compiles to
+/// nothing and no texture buffer is read.
+override TEXTURES: bool = false;
 
 // ---- constants (each one's story is in `src/buffers.rs`) ------------------------------
 
@@ -56,6 +60,8 @@ const TRIANGLE_MOLLER_TRUMBORE: u32 = 1u;
 const TRIANGLE_WATERTIGHT: u32 = 2u;
 const PRIM_NONE: u32 = 0xffffffffu;
 const FLAT: u32 = 0u; // Triangle::normals of a flat triangle
+const NO_UVS: u32 = 0u; // Triangle::uvs of an untextured triangle
+const NO_TEXTURE: u32 = 0xffffffffu; // TriangleUvs::map_kd / map_ka: no map
 const TRIANGLE_BIT: u32 = 0x80000000u;
 const INFINITY: f32 = 3.40282347e38; // f32::MAX: a t that every real hit beats
 const SHADOW_EPSILON: f32 = 1.1920929e-7; // see buffers::SHADOW_EPSILON
@@ -109,7 +115,7 @@ struct Triangle {
     b: vec3<f32>,
     normals: u32,
     c: vec3<f32>,
-    _pad0: u32,
+    uvs: u32,
 }
 
 struct VertexNormals {
@@ -119,6 +125,21 @@ struct VertexNormals {
     _pad1: u32,
     nc: vec3<f32>,
     _pad2: u32,
+}
+
+struct TriangleUvs {
+    uv_a: vec2<f32>,
+    uv_b: vec2<f32>,
+    uv_c: vec2<f32>,
+    map_kd: u32,
+    map_ka: u32,
+}
+
+struct Texture {
+    offset: u32,
+    width: u32,
+    height: u32,
+    _pad0: u32,
 }
 
 struct BvhNode {
@@ -179,6 +200,12 @@ struct HitOut {
 @group(0) @binding(8) var<storage, read> nodes: array<BvhNode>;
 @group(0) @binding(9) var<storage, read> prim_ids: array<u32>;
 @group(0) @binding(10) var<storage, read> normals: array<VertexNormals>;
+/// The textured triangles' texture coordinates (entry 0 unused): read by `shade` only.
+@group(0) @binding(15) var<storage, read> uvs: array<TriangleUvs>;
+/// Each texture's place in `texels`.
+@group(0) @binding(16) var<storage, read> textures: array<Texture>;
+/// Every texture's linear RGB texels, three f32 each, rows bottom to top.
+@group(0) @binding(17) var<storage, read> texels: array<f32>;
 /// The lean frame (`render_rgba8`): each pixel's colour as `pack_rgba8` gives it.
 @group(0) @binding(14) var<storage, read_write> image_rgba8: array<u32>;
 

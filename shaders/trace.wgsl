@@ -1,4 +1,4 @@
-// glint's kernel, part 3 of 4: rays through the scene (after `common.wgsl` and
+// glint's kernel, part 4 of 5: rays through the scene (after `common.wgsl` and
 // `prims.wgsl`; see the first's header for how the parts are joined and mirrored). The
 // camera, the searches for the nearest hit and for a blocker (every primitive, or the
 // BVH), shading, and the entry points. Mirror: `src/cpu/trace.rs`.
@@ -322,13 +322,14 @@ fn spot_factor(light: Light, c: f32) -> f32 {
 /// smallest normal f32 is 0 (`flush`), so that drivers that flush subnormals agree.
 fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     let m = materials[prim_material(hit)];
+    let a = albedo(hit, m);
     let p = ray.origin + ray.dir * hit.t;
     var n = prim_normal(hit, p);
     if dot(n, ray.dir) > 0.0 {
         n = -n;
     }
     let sh = shading_at(hit, p, n);
-    var color = flush3(params.ambient * m.ka);
+    var color = flush3(params.ambient * a.ka);
     if USES_DIFFUSE && m.model != MODEL_AMBIENT {
         // The view vector is the reversed ray. Not `normalize(ray.origin - p)`: that is
         // origin − (origin + dir·t), which loses low bits to cancellation, and which
@@ -368,7 +369,7 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
                     }
                 }
             }
-            color = color + flush3(ip * m.kd * ndl);
+            color = color + flush3(ip * a.kd * ndl);
             if USES_PHONG && m.model == MODEL_PHONG {
                 let r = sh.n * (2.0 * ndl) - l;
                 let rv = max0(dot(r, v));

@@ -30,6 +30,14 @@ pub struct SceneBuffers {
     /// names no entry); empty when no triangle is smooth, and then the pipeline's `SMOOTH`
     /// is off and the shader never reads it.
     pub normals: Vec<VertexNormals>,
+    /// Texture coordinates of the textured triangles, entry 0 unused (`Triangle::uvs` =
+    /// `NO_UVS` names no entry); empty when no triangle is textured, and then the
+    /// pipeline's `TEXTURES` is off and the shader never reads it, `textures` or `texels`.
+    pub uvs: Vec<TriangleUvs>,
+    /// Each texture's place in `texels`, in the scene's order of textures.
+    pub textures: Vec<Texture>,
+    /// Every texture's linear RGB texels, three f32 each, rows bottom (v = 0) to top.
+    pub texels: Vec<f32>,
     /// [`SceneBuffers::leaf_triangles`], made on its first call.
     leaf_triangles: std::sync::OnceLock<Vec<Triangle>>,
     /// The triangle algorithm (`TRIANGLE_*`).
@@ -58,7 +66,32 @@ impl SceneBuffers {
     /// Flattens a validated scene at `width`×`height` pixels with the given triangle algorithm.
     pub fn new(scene: &Scene, width: u32, height: u32, algo: TriangleAlgorithm) -> Self {
         let (triangles, normals) = flat_triangles(&scene.triangles, &scene.smooth);
-        Self::with_triangles(scene, triangles, normals, width, height, algo)
+        Self::with_triangles(scene, triangles, normals, width, height, algo, None).0
+    }
+
+    /// [`SceneBuffers::new`] for a scene that replaces the one `old` was made from (a file
+    /// saved again): where its spheres and flattened triangles are `old`'s, `old`'s BVH is
+    /// kept instead of built (the `bool`), so changed lights, materials, textures or camera
+    /// cost no BVH. The same buffers as [`SceneBuffers::new`] either way.
+    pub fn new_reusing(
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        algo: TriangleAlgorithm,
+        old: SceneBuffers,
+    ) -> (Self, bool) {
+        let (triangles, normals) = flat_triangles(&scene.triangles, &scene.smooth);
+        Self::with_triangles(scene, triangles, normals, width, height, algo, Some(old))
+    }
+
+    /// The camera and frame size in `params` made `cam`'s at `width`×`height`, exactly as
+    /// [`SceneBuffers::new`] sets them; everything else kept. Moving a camera needs no other
+    /// buffer.
+    pub fn set_camera(&mut self, cam: &crate::scene::Camera, width: u32, height: u32) {
+        self.params = Params {
+            samples: cam.samples.max(1),
+            ..camera_params(self.params, cam, width, height)
+        };
     }
 
     /// [`SceneBuffers::new`] for a scene that is not needed afterwards: its triangles (and
@@ -77,40 +110,30 @@ impl SceneBuffers {
         );
         let (triangles, normals) = flat_triangles(&scene_triangles, &smooth);
         drop((scene_triangles, smooth));
-        Self::with_triangles(scene, triangles, normals, width, height, algo)
+        Self::with_triangles(scene, triangles, normals, width, height, algo, None).0
     }
 
-    /// The buffers of `scene` whose triangles (and normals) are already flat.
+    /// The buffers of `scene` whose triangles (and normals) are already flat; the BVH
+    /// taken from `old` where it was made from the same primitives (then `true`).
     fn with_triangles(
         scene: &Scene,
-        triangles: Vec<Triangle>,
+        mut triangles: Vec<Triangle>,
         normals: Vec<VertexNormals>,
         width: u32,
         height: u32,
         algo: TriangleAlgorithm,
-    ) -> Self {
+        old: Option<SceneBuffers>,
+    ) -> (Self, bool) {
         let t_flat = std::time::Instant::now();
+        let uvs = triangle_uvs(&mut triangles, &scene.uvs, &scene.materials);
         let cam = &scene.camera;
-        let [forward, right, up] = camera_basis(cam.eye, cam.look_at, cam.up);
         let params = Params {
-            eye: cam.eye,
-            width,
-            forward,
-            height,
-            right,
-            tan_half: (cam.fov.to_radians() / 2.0).tan(),
-            up,
-            aspect: width as f32 / height as f32,
             ambient: flush_colour(scene.ambient),
             background: flush_colour(scene.background),
-            tile_x: 0,
-            tile_y: 0,
-            tile_width: width,
-            tile_height: height,
             samples: cam.samples,
             max_depth: scene.max_depth,
             min_weight: scene.min_weight,
-            ..Params::default()
+            ..camera_params(Params::default(), cam, width, height)
         };
         let materials: Vec<Material> = scene
             .materials
@@ -142,10 +165,40 @@ impl SceneBuffers {
                 ..Sphere::default()
             })
             .collect();
-        let lights = scene.lights.iter().map(light).collect();
+        let lights: Vec<Light> = scene.lights.iter().map(light).collect();
+        let (textures, texels) = texture_buffers(&scene.textures);
         crate::stages::record("flatten", t_flat.elapsed());
-        SceneBuffers {
+        if let Some(old) = old.filter(|o| o.spheres == spheres && o.triangles == triangles) {
+            let buf = SceneBuffers {
+                params: Params {
+                    n_spheres: spheres.len() as u32,
+                    n_triangles: triangles.len() as u32,
+                    n_lights: scene.lights.len() as u32,
+                    n_nodes: old.nodes.len() as u32,
+                    samples: params.samples.max(1),
+                    ..params
+                },
+                spheres,
+                triangles,
+                materials,
+                lights,
+                nodes: old.nodes,
+                prim_ids: old.prim_ids,
+                normals,
+                uvs,
+                textures,
+                texels,
+                leaf_triangles: old.leaf_triangles,
+                triangle_algo: algo.code(),
+                shadows: scene.shadows,
+            };
+            return (buf, true);
+        }
+        let buf = SceneBuffers {
             normals,
+            uvs,
+            textures,
+            texels,
             ..SceneBuffers::assemble_cached(
                 scene.cache.as_deref(),
                 params,
@@ -156,7 +209,8 @@ impl SceneBuffers {
                 algo,
                 scene.shadows,
             )
-        }
+        };
+        (buf, false)
     }
 
     /// For the CPU's packet tracer only: `triangles[prim_ids[k]]` at k (a zeroed triangle
@@ -190,6 +244,8 @@ impl SceneBuffers {
         self.nodes = Vec::new();
         self.prim_ids = Vec::new();
         self.normals = Vec::new();
+        self.uvs = Vec::new();
+        self.texels = Vec::new();
         self.leaf_triangles = std::sync::OnceLock::new();
     }
 
@@ -240,10 +296,34 @@ impl SceneBuffers {
             nodes: bvh.nodes,
             prim_ids: bvh.prim_ids,
             normals: Vec::new(),
+            uvs: Vec::new(),
+            textures: Vec::new(),
+            texels: Vec::new(),
             leaf_triangles: std::sync::OnceLock::new(),
             triangle_algo: algo.code(),
             shadows,
         }
+    }
+}
+
+/// `params` with the camera fields and the frame's size (its tile the whole frame) made
+/// `cam`'s at `width`×`height`: the basis in f32 left to right, tan(fov / 2), the aspect.
+fn camera_params(params: Params, cam: &crate::scene::Camera, width: u32, height: u32) -> Params {
+    let [forward, right, up] = camera_basis(cam.eye, cam.look_at, cam.up);
+    Params {
+        eye: cam.eye,
+        width,
+        forward,
+        height,
+        right,
+        tan_half: (cam.fov.to_radians() / 2.0).tan(),
+        up,
+        aspect: width as f32 / height as f32,
+        tile_x: 0,
+        tile_y: 0,
+        tile_width: width,
+        tile_height: height,
+        ..params
     }
 }
 
@@ -282,6 +362,8 @@ pub struct Specialisation {
     pub whitted: bool,
     /// WGSL `LIGHT_KINDS`: some light is directional or a spot.
     pub light_kinds: bool,
+    /// WGSL `TEXTURES`: some triangle is textured.
+    pub textures: bool,
 }
 
 /// Scenes with at most this many primitives are traced by testing every primitive: a
@@ -307,6 +389,7 @@ impl Specialisation {
                     .iter()
                     .any(|m| m.kr.iter().chain(&m.kt).any(|&k| k > 0.0)),
             light_kinds: buf.lights.iter().any(|l| l.kind != LIGHT_POINT),
+            textures: !buf.uvs.is_empty(),
         }
     }
 
@@ -327,6 +410,7 @@ impl Specialisation {
             antialias: true,
             whitted: true,
             light_kinds: true,
+            textures: true,
         }
     }
 
@@ -336,7 +420,7 @@ impl Specialisation {
     }
 
     /// The `(name, value)` pairs for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 11] {
+    pub fn constants(&self) -> [(&'static str, f64); 12] {
         let b = |x: bool| if x { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -350,6 +434,7 @@ impl Specialisation {
             ("ANTIALIAS", b(self.antialias)),
             ("WHITTED", b(self.whitted)),
             ("LIGHT_KINDS", b(self.light_kinds)),
+            ("TEXTURES", b(self.textures)),
         ]
     }
 }
@@ -428,6 +513,55 @@ fn cached_bvh(
         )
     });
     bvh
+}
+
+/// The records of the textured triangles (entry 0 stands for "untextured"; empty when no
+/// triangle is): a triangle with coordinates whose material has a map gets its own entry,
+/// named in its `uvs`.
+fn triangle_uvs(
+    triangles: &mut [Triangle],
+    runs: &[crate::scene::TextureCoords],
+    materials: &[crate::scene::Material],
+) -> Vec<TriangleUvs> {
+    let mut out = Vec::new();
+    for run in runs {
+        for (k, uv) in run.uvs.iter().enumerate() {
+            let t = &mut triangles[run.first + k];
+            let (ka, kd) = materials[t.material as usize].maps();
+            if (ka, kd) == (None, None) {
+                continue;
+            }
+            if out.is_empty() {
+                out.push(TriangleUvs::default());
+            }
+            t.uvs = out.len() as u32;
+            out.push(TriangleUvs {
+                uv_a: uv[0],
+                uv_b: uv[1],
+                uv_c: uv[2],
+                map_kd: kd.unwrap_or(NO_TEXTURE),
+                map_ka: ka.unwrap_or(NO_TEXTURE),
+            });
+        }
+    }
+    out
+}
+
+/// The scene's textures as the shader reads them: each one's place, and all their texels
+/// in one list.
+fn texture_buffers(textures: &[crate::scene::Texture]) -> (Vec<Texture>, Vec<f32>) {
+    let mut places = Vec::with_capacity(textures.len());
+    let mut texels = Vec::with_capacity(textures.iter().map(|t| t.texels.len()).sum());
+    for t in textures {
+        places.push(Texture {
+            offset: texels.len() as u32,
+            width: t.width,
+            height: t.height,
+            _pad0: 0,
+        });
+        texels.extend_from_slice(&t.texels);
+    }
+    (places, texels)
 }
 
 /// The scene's triangles as the shader's, and the vertex normals they name (entry 0 stands

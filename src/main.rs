@@ -1,4 +1,4 @@
-//! The `glint` command line: `render`, `compare`, `diff`, `adapters`, `bench`. It parses
+//! The `glint` command line: `render`, `view`, `compare`, `diff`, `adapters`, `bench`. It parses
 //! the arguments, reads the environment once, draws the progress bar and prints; the
 //! library ([`glint::render`]) does the work.
 
@@ -63,6 +63,28 @@ fn run(cli: Cli) -> Result<()> {
         } => compare(&scene, frame, common, &diff),
         Command::Diff { a, b, diff } => diff_images(&a, &b, &diff),
         Command::Adapters => adapters(),
+        Command::View {
+            scene,
+            backend,
+            size,
+            samples,
+            frames,
+            screenshot,
+            common,
+        } => cli::view::run(cli::view::Options {
+            scene,
+            backend: backend.into(),
+            size,
+            samples,
+            frames,
+            screenshot,
+            adapter: common.adapter,
+            load: glint::scene::LoadOptions {
+                max_input_bytes: max_input_bytes(),
+                confine: common.confine,
+                cache: None,
+            },
+        }),
         Command::Bench {
             scenes,
             size,

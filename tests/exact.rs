@@ -45,6 +45,7 @@ fn specialisations() -> [Specialisation; 2] {
         antialias: true,
         whitted: true,
         light_kinds: true,
+        textures: true,
     };
     let lean = Specialisation {
         has_triangles: false,
@@ -55,6 +56,7 @@ fn specialisations() -> [Specialisation; 2] {
         antialias: false,
         whitted: false,
         light_kinds: false,
+        textures: false,
         ..all
     };
     [all, lean]

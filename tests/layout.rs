@@ -4,7 +4,8 @@
 use std::mem::{offset_of, size_of};
 
 use glint::buffers::{
-    BvhNode, HitOut, Light, Material, Params, RayIn, Sphere, Triangle, VertexNormals,
+    BvhNode, HitOut, Light, Material, Params, RayIn, Sphere, Texture, Triangle, TriangleUvs,
+    VertexNormals,
 };
 use glint::gpu::SHADER_SOURCE;
 
@@ -97,12 +98,14 @@ fn shared_structs_match_wgsl() {
         "Sphere",
         [center, radius, material, _pad0, _pad1, _pad2]
     );
+    check_struct!(&m, Triangle, "Triangle", [a, material, b, normals, c, uvs]);
     check_struct!(
         &m,
-        Triangle,
-        "Triangle",
-        [a, material, b, normals, c, _pad0]
+        TriangleUvs,
+        "TriangleUvs",
+        [uv_a, uv_b, uv_c, map_kd, map_ka]
     );
+    check_struct!(&m, Texture, "Texture", [offset, width, height, _pad0]);
     check_struct!(
         &m,
         VertexNormals,
@@ -178,6 +181,11 @@ fn shader_constants_match_rust() {
     );
     assert_eq!(find("PRIM_NONE"), naga::Literal::U32(PRIM_NONE));
     assert_eq!(find("FLAT"), naga::Literal::U32(FLAT));
+    assert_eq!(find("NO_UVS"), naga::Literal::U32(glint::buffers::NO_UVS));
+    assert_eq!(
+        find("NO_TEXTURE"),
+        naga::Literal::U32(glint::buffers::NO_TEXTURE)
+    );
     assert_eq!(find("TRIANGLE_BIT"), naga::Literal::U32(TRIANGLE_BIT));
     assert_eq!(find("INFINITY"), naga::Literal::F32(INFINITY));
     assert_eq!(find("SHADOW_EPSILON"), naga::Literal::F32(SHADOW_EPSILON));
@@ -202,6 +210,7 @@ fn shader_constants_match_rust() {
         antialias: true,
         whitted: true,
         light_kinds: true,
+        textures: true,
     };
     for (name, _) in spec.constants() {
         assert!(

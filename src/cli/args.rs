@@ -114,6 +114,31 @@ pub enum Command {
         #[arg(long, default_value = "diff.png")]
         diff: PathBuf,
     },
+    /// Open a window on a scene: orbit (left button), pan (right), zoom (wheel), fly
+    /// (W A S D Q E), reset (R); the picture refines while the camera is still and reloads
+    /// when the scene or a file it reads is saved. P saves a PNG, X an EXR, C prints the
+    /// camera, H the keys.
+    View {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Which tracer (auto: a real GPU where there is one, else the CPU tracer).
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: Backend,
+        /// Window size WxH (default: the scene's camera).
+        #[arg(long, value_parser = parse_size)]
+        size: Option<(u32, u32)>,
+        /// Antialiasing: N×N samples a pixel, refined one at a time (default: the scene's).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=glint::scene::MAX_SAMPLES as i64))]
+        samples: Option<u32>,
+        /// Draw this many frames, then exit (with --screenshot: for tests and scripts).
+        #[arg(long)]
+        frames: Option<u32>,
+        /// With --frames: write the last frame presented to this PNG.
+        #[arg(long, requires = "frames")]
+        screenshot: Option<PathBuf>,
+        #[command(flatten)]
+        common: CommonArgs,
+    },
     /// List the Vulkan adapters, best first, with their drivers and versions.
     Adapters,
     /// Compare two images (PNG or EXR) with `compare`'s metrics and write a difference

@@ -1,7 +1,8 @@
 //! The command line's parts that are not the library's work: its arguments, progress bar,
-//! allocator and environment. Only the `glint` binary compiles them.
+//! allocator, environment and the viewer's window. Only the `glint` binary compiles them.
 
 pub mod alloc;
 pub mod args;
 pub mod env;
 pub mod progress;
+pub mod view;

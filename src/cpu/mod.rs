@@ -4,6 +4,7 @@
 pub mod common;
 pub mod packet;
 pub mod prims;
+pub mod texture;
 /// The numeric kernel ([`crate::shared::real`]), where the mirror's arithmetic lives.
 pub use crate::shared::real;
 pub mod trace;
@@ -131,7 +132,7 @@ fn packet_rows_into(
     const PW: usize = packet::PACKET_W as usize;
     let (pw, ph) = (PW, packet::PACKET_H as usize);
     let band = ph * w as usize;
-    let trace: packet::PacketFn = if g.spec.light_kinds {
+    let trace: packet::PacketFn = if g.spec.light_kinds || g.spec.textures {
         packet::trace_packet_mirror
     } else {
         packet::tracer(simd)
@@ -188,6 +189,52 @@ pub fn render_f64_rows(
 ) -> Vec<[f32; 4]> {
     let g = globals_f64(scene, buf, spec);
     rows_with(&g, y0, rows, &|_, _| {})
+}
+
+/// The start of a progressive frame for [`add_sample_f32`]: every pixel's running sum 0 and
+/// its nearest hit −1 (none yet).
+pub fn samples_start(width: u32, height: u32) -> Vec<[f32; 4]> {
+    vec![[0.0, 0.0, 0.0, -1.0]; width as usize * height as usize]
+}
+
+/// Adds sample position `k` of the n×n that `trace_pixel` takes (n = `buf.params.samples`;
+/// row `k / n`, column `k % n`) of every pixel to `acc` (row-major, `[Σr, Σg, Σb,
+/// t_near]`, from [`samples_start`]), in `trace_pixel`'s order of additions. After the
+/// n² samples 0, 1, …, n² − 1, [`samples_finish`] gives [`render_f32`]'s antialiased image in
+/// every bit: what a viewer shows while the camera is still, refining one sample position
+/// a frame. The mirror's tracer, one ray at a time, rows in parallel.
+pub fn add_sample_f32(buf: &SceneBuffers, spec: Specialisation, k: u32, acc: &mut [[f32; 4]]) {
+    let g = globals_f32(buf, spec);
+    let n = g.cam.samples.max(1);
+    let (dx, dy) = (
+        trace::sample_offset::<f32>(k % n, n),
+        trace::sample_offset::<f32>(k / n, n),
+    );
+    let w = g.cam.width as usize;
+    acc.par_chunks_mut(w).enumerate().for_each(|(j, row)| {
+        for (i, a) in row.iter_mut().enumerate() {
+            let s = trace::trace_sample(&g, i as u32, j as u32, dx, dy);
+            let sum = V3::new(a[0], a[1], a[2]) + V3::new(s[0], s[1], s[2]);
+            let mut t_near = a[3];
+            if s[3] >= 0.0 && (t_near < 0.0 || s[3] < t_near) {
+                t_near = s[3];
+            }
+            *a = [sum.x, sum.y, sum.z, t_near];
+        }
+    });
+}
+
+/// The picture after `k` ≥ 1 of the `n2` sample positions were added by [`add_sample_f32`]:
+/// each sum divided by `k` (after all `n2`, `trace_pixel`'s flushed quotient, so the
+/// image is [`render_f32`]'s in every bit), the nearest hit as it stands.
+pub fn samples_finish(acc: &[[f32; 4]], k: u32, n2: u32) -> Vec<[f32; 4]> {
+    acc.par_iter()
+        .map(|a| {
+            let c = V3::new(a[0], a[1], a[2]) / V3::splat(k as f32);
+            let c = if k == n2 { common::flush3(c) } else { c };
+            [c.x, c.y, c.z, a[3]]
+        })
+        .collect()
 }
 
 /// What `glint render` and [`crate::Renderer::describe`] call the f32 CPU tracer: "cpu

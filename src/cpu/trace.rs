@@ -392,13 +392,14 @@ pub fn spot_factor<R: Real>(light: &Light, c: R) -> R {
 /// WGSL `shade`: the Phong model (README, "Scene format") at a hit, each term only where the model has it.
 pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
     let m: &Material = &g.buf.materials[prim_material(g, hit) as usize];
+    let a = super::texture::albedo(g, hit, m);
     let p = ray.origin + ray.dir * hit.t;
     let mut n = prim_normal(g, hit, p);
     if n.dot(ray.dir) > R::ZERO {
         n = -n;
     }
     let sh = shading_at(g, hit, p, n);
-    let mut color = flush3(V3::from_f32(g.buf.params.ambient) * V3::from_f32(m.ka));
+    let mut color = flush3(V3::from_f32(g.buf.params.ambient) * a.ka);
     if g.spec.uses_diffuse && m.model != MODEL_AMBIENT {
         // The reversed ray, as the shader has it (see there why not `origin - p`).
         let v = (-ray.dir).normalize();
@@ -437,7 +438,7 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
                     }
                 }
             }
-            color = color + flush3(ip * V3::from_f32(m.kd) * ndl);
+            color = color + flush3(ip * a.kd * ndl);
             if g.spec.uses_phong && m.model == MODEL_PHONG {
                 let two = R::ONE + R::ONE;
                 let r = sh.n * (two * ndl) - l;

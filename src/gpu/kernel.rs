@@ -97,9 +97,10 @@ fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
 /// The scene's read-only storage bindings: spheres, triangles, materials, lights, BVH
 /// nodes, primitive ids (binding 0 is `params`).
 const SCENE_STORAGE: [u32; 6] = [1, 2, 3, 4, 8, 9];
-/// The smooth triangles' vertex normals: read by `shade` only, so bound for `render` only
-/// (the `query` entry point stays within eight storage buffers).
-const NORMALS_BINDING: u32 = 10;
+/// What `shade` alone reads, so bound for `render` only (the `query` entry point stays
+/// within eight storage buffers): the smooth triangles' vertex normals, the textured
+/// triangles' coordinates, the textures' places and their texels.
+const SHADING_BINDINGS: [u32; 4] = [10, 15, 16, 17];
 /// Every scene binding, in the order of `Kernel::scene_buffers`.
 const SCENE_BINDINGS: [u32; 7] = [0, 1, 2, 3, 4, 8, 9];
 
@@ -269,7 +270,7 @@ impl Kernel {
                 ),
             };
             let mut render = scene_entries();
-            render.push(storage_entry(NORMALS_BINDING, true));
+            render.extend(SHADING_BINDINGS.map(|b| storage_entry(b, true)));
             let mut query = scene_entries();
             query.push(storage_entry(6, true));
             query.push(storage_entry(7, false));
@@ -617,15 +618,16 @@ impl Kernel {
             .min(max_rows.max(1));
         let tile_bytes = rows as u64 * width as u64 * px_bytes;
         check_size(device, "one tile of the image", tile_bytes)?;
-        let (scene, normals, output, staging) =
+        let (scene, shading, output, staging) =
             scoped(device, "upload", || -> Result<_, GpuError> {
                 let scene = self.scene_buffers(device, buf)?;
-                let normals = storage_buffer(
-                    device,
-                    "vertex normals",
-                    &buf.normals,
-                    wgpu::BufferUsages::empty(),
-                )?;
+                let none = wgpu::BufferUsages::empty();
+                let shading = [
+                    storage_buffer(device, "vertex normals", &buf.normals, none)?,
+                    storage_buffer(device, "texture coordinates", &buf.uvs, none)?,
+                    storage_buffer(device, "textures", &buf.textures, none)?,
+                    storage_buffer(device, "texels", &buf.texels, none)?,
+                ];
                 let output = device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("image"),
                     size: tile_bytes,
@@ -638,7 +640,7 @@ impl Kernel {
                     usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 });
-                Ok((scene, normals, output, staging))
+                Ok((scene, shading, output, staging))
             })??;
         let accel = self.accel(device, queue, buf)?;
         timings.accel = accel.as_ref().map_or(Duration::ZERO, |a| a.build);
@@ -647,10 +649,12 @@ impl Kernel {
             binding: out_binding,
             resource: output.as_entire_binding(),
         });
-        entries.push(wgpu::BindGroupEntry {
-            binding: NORMALS_BINDING,
-            resource: normals.as_entire_binding(),
-        });
+        for (binding, b) in SHADING_BINDINGS.into_iter().zip(&shading) {
+            entries.push(wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            });
+        }
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("render"),
             layout,

@@ -14,11 +14,12 @@ use std::time::{Duration, Instant};
 
 pub use kernel::{GpuTimings, Kernel, tile_rows};
 
-/// The WGSL source of the kernel: `shaders/common.wgsl`, `prims.wgsl`, `trace.wgsl` and
-/// `whitted.wgsl`, joined in that order (WGSL needs no declaration before use).
+/// The WGSL source of the kernel: `shaders/common.wgsl`, `prims.wgsl`, `texture.wgsl`,
+/// `trace.wgsl` and `whitted.wgsl`, joined in that order (WGSL needs no declaration before use).
 pub const SHADER_SOURCE: &str = concat!(
     include_str!("../../shaders/common.wgsl"),
     include_str!("../../shaders/prims.wgsl"),
+    include_str!("../../shaders/texture.wgsl"),
     include_str!("../../shaders/trace.wgsl"),
     include_str!("../../shaders/whitted.wgsl"),
 );

@@ -5,6 +5,8 @@
 //!   band by band, an EXR, or memory), with `auto`'s fallback to the CPU when the scene is
 //!   too large for the GPU, the cache's lifecycle, typed [`Warning`]s and [`Note`]s as they
 //!   happen, progress, and the timings in a [`RenderReport`].
+//! - [`Live`]: frames of one scene under a moving camera, refined while it is still, for
+//!   interactive viewers (`glint view`).
 //! - [`compare()`]: the GPU against its CPU mirror and both against the f64 ground truth, as
 //!   a [`CompareReport`].
 //!
@@ -22,12 +24,14 @@
 
 mod compare;
 mod job;
+mod live;
 mod memory;
 mod output;
 mod renderer;
 
 pub use compare::{CompareReport, RayQueryResult, compare};
 pub use job::{Event, Job, Note, RenderReport, Warning};
+pub use live::{Live, Rebuilt};
 pub use memory::check_memory;
 pub use output::Output;
 pub use renderer::{

@@ -287,6 +287,35 @@ impl Renderer {
         })
     }
 
+    /// A renderer on a [`Gpu`] the caller opened (for instance on an adapter that can also
+    /// present to a window): `Gpu` and `GpuRq` trace on it, `Auto` too unless it is a CPU
+    /// implementation (then the CPU tracer, as `Auto` decides everywhere), `Cpu` and
+    /// `CpuF64` leave it unused.
+    pub fn from_gpu(backend: Backend, gpu: Gpu) -> Result<Renderer, RenderError> {
+        let (tracer, note) = match backend {
+            Backend::Cpu => (Tracer::Cpu, None),
+            Backend::CpuF64 => (Tracer::CpuF64, None),
+            Backend::Gpu => (Tracer::Gpu(Box::new(gpu)), None),
+            Backend::GpuRq => {
+                gpu.ray_query_kernel()?;
+                (Tracer::GpuRq(Box::new(gpu)), None)
+            }
+            Backend::Auto if is_cpu_adapter(&gpu.info) => (
+                Tracer::Cpu,
+                Some(format!(
+                    "the adapter is {}, a CPU implementation: glint's CPU tracer renders this",
+                    gpu.info.name
+                )),
+            ),
+            Backend::Auto => (Tracer::Gpu(Box::new(gpu)), None),
+        };
+        Ok(Renderer {
+            backend,
+            tracer,
+            note,
+        })
+    }
+
     /// What `Auto` chose and why, when it did not choose the GPU.
     pub fn note(&self) -> Option<&str> {
         self.note.as_deref()

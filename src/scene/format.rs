@@ -105,6 +105,11 @@ pub struct MaterialFile {
     pub ior: Option<Spanned<f32>>,
     /// Weight kr and kt by the dielectric Fresnel reflectance.
     pub fresnel: Option<bool>,
+    /// An image (PNG or JPEG, relative to the scene file) whose colour multiplies kd, and
+    /// ka unless `map_ka` is given, on triangles with `uvs`.
+    pub map_kd: Option<Spanned<String>>,
+    /// An image whose colour multiplies ka on triangles with `uvs`.
+    pub map_ka: Option<Spanned<String>>,
 }
 
 /// `[[spheres]]`.
@@ -127,6 +132,8 @@ pub struct TriangleFile {
     pub vertices: Spanned<[[f32; 3]; 3]>,
     /// Material name.
     pub material: Spanned<String>,
+    /// Texture coordinates (u, v) at the three vertices, v up.
+    pub uvs: Option<Spanned<[[f32; 2]; 3]>>,
 }
 
 /// `[[meshes]]`.

@@ -12,8 +12,10 @@
 //!   vertex order. An index past its primitive's vertices is an error naming the mesh and
 //!   the primitive.
 //! - **Materials:** `baseColorFactor` gives kd and ka (a diffuse material); a primitive
-//!   without one takes glTF's default, white. Textures are not modelled: a material with a
-//!   `baseColorTexture` gets a warning and its factor only.
+//!   without one takes glTF's default, white. A `baseColorTexture` on TEXCOORD_0 multiplies
+//!   both (the image from a buffer view, a `data:` URI or a file beside the glTF), its
+//!   coordinates turned from glTF's v-down to glint's v-up (v' = 1 − v); its sampler's wrap
+//!   is taken as REPEAT, and other texture sets and wrap modes get a warning.
 //! - **Buffers** are read through the scene's reader, relative to the file, with its limits
 //!   and confinement; `data:` URIs are decoded.
 
@@ -68,9 +70,27 @@ pub enum GltfError {
         /// What is wrong, as for a scene colour.
         message: String,
     },
+    /// An image could not be read.
+    #[error("glTF image {index}: {message}")]
+    Image {
+        /// The image's index.
+        index: usize,
+        /// What is wrong.
+        message: String,
+    },
     /// No scene to draw.
     #[error("glTF: the file has no scene")]
     NoScene,
+}
+
+/// A glTF material as glint takes it.
+pub struct GltfMaterial {
+    /// Its name (or `materialK`).
+    pub name: String,
+    /// `baseColorFactor`'s RGB.
+    pub base_colour: [f32; 3],
+    /// The index into [`GltfMesh::images`] of its `baseColorTexture`'s image.
+    pub texture: Option<usize>,
 }
 
 /// A glTF file's triangles, their materials and what was left out.
@@ -78,9 +98,11 @@ pub struct GltfMesh {
     /// Positions, triangles and (for a smooth mesh) normals, in the file's order: nodes
     /// depth-first, then primitives.
     pub parsed: Parsed,
-    /// Per material of the file (then glTF's default, white, last): its name and base
-    /// colour.
-    pub materials: Vec<(String, [f32; 3])>,
+    /// Per material of the file (then glTF's default, white, last).
+    pub materials: Vec<GltfMaterial>,
+    /// The images the materials' textures use, by the file's image index: a name for
+    /// messages (`file#imageK`) and the encoded bytes; `None` for an image no texture uses.
+    pub images: Vec<Option<(std::path::PathBuf, Vec<u8>)>>,
     /// Per triangle, its index into `materials`.
     pub triangle_material: Vec<u32>,
     /// Whether the file's buffers are all inside it (a `.glb`, or `data:` URIs): then its
@@ -143,21 +165,50 @@ pub fn read(
         buffers.push(data);
     }
 
-    let mut materials: Vec<(String, [f32; 3])> = Vec::new();
-    let mut textured = 0;
+    let mut materials: Vec<GltfMaterial> = Vec::new();
+    let mut images: Vec<Option<(std::path::PathBuf, Vec<u8>)>> =
+        g.document.images().map(|_| None).collect();
+    let mut other_sets = 0;
+    let mut other_wraps = 0;
     for (k, m) in g.document.materials().enumerate() {
         let pbr = m.pbr_metallic_roughness();
         let c = pbr.base_color_factor();
-        if pbr.base_color_texture().is_some() {
-            textured += 1;
+        let mut texture = None;
+        if let Some(info) = pbr.base_color_texture() {
+            if info.tex_coord() != 0 {
+                other_sets += 1;
+            } else {
+                let t = info.texture();
+                use gltf::texture::WrappingMode::Repeat;
+                if t.sampler().wrap_s() != Repeat || t.sampler().wrap_t() != Repeat {
+                    other_wraps += 1;
+                }
+                let image = t.source();
+                let index = image.index();
+                if images[index].is_none() {
+                    let bytes = image_bytes(&image, &buffers, folder, read, &mut self_contained)?;
+                    images[index] =
+                        Some((format!("{}#image{index}", path.display()).into(), bytes));
+                }
+                texture = Some(index);
+            }
         }
         let name = m
             .name()
             .map_or_else(|| format!("material{k}"), str::to_string);
-        materials.push((name, [c[0], c[1], c[2]]));
+        materials.push(GltfMaterial {
+            name,
+            base_colour: [c[0], c[1], c[2]],
+            texture,
+        });
     }
     let default_material = materials.len() as u32;
-    materials.push(("default".into(), [1.0; 3]));
+    materials.push(GltfMaterial {
+        name: "default".into(),
+        base_colour: [1.0; 3],
+        texture: None,
+    });
+    let textured: Vec<bool> = materials.iter().map(|m| m.texture.is_some()).collect();
 
     let scene = g
         .document
@@ -171,8 +222,10 @@ pub fn read(
             short_faces: Vec::new(),
             normals: Vec::new(),
             normal_ix: Vec::new(),
+            uvs: Vec::new(),
         },
         materials,
+        images,
         triangle_material: Vec::new(),
         self_contained,
         warnings: Vec::new(),
@@ -194,6 +247,7 @@ pub fn read(
                 &buffers,
                 normals,
                 default_material,
+                &textured,
                 &mut out,
                 &mut left,
             )?;
@@ -221,12 +275,62 @@ pub fn read(
             left.morphs
         ));
     }
-    if textured > 0 {
+    if other_sets > 0 {
         out.warnings.push(format!(
-            "{textured} material(s) with a base colour texture: textures are not modelled, the base colour factor is used"
+            "{other_sets} material(s) with a base colour texture on a set other than TEXCOORD_0: untextured"
         ));
     }
+    if other_wraps > 0 {
+        out.warnings.push(format!(
+            "{other_wraps} base colour texture(s) with a wrap mode other than REPEAT: repeated"
+        ));
+    }
+    if left.no_uvs > 0 {
+        out.warnings.push(format!(
+            "{} textured primitive(s) without TEXCOORD_0: drawn with the texture's colour at (0, 0)",
+            left.no_uvs
+        ));
+    }
+    if !textured.iter().any(|&t| t) {
+        out.parsed.uvs = Vec::new();
+    }
     Ok(out)
+}
+
+/// The encoded bytes of `image`: from a buffer view, a `data:` URI, or a file beside the
+/// glTF (read through `read`; then the file is not self-contained).
+fn image_bytes(
+    image: &gltf::Image<'_>,
+    buffers: &[Vec<u8>],
+    folder: &Path,
+    read: &super::ReadFile<'_>,
+    self_contained: &mut bool,
+) -> Result<Vec<u8>, GltfError> {
+    let index = image.index();
+    let err = |message: String| GltfError::Image { index, message };
+    match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let data = &buffers[view.buffer().index()];
+            data.get(view.offset()..view.offset() + view.length())
+                .map(<[u8]>::to_vec)
+                .ok_or_else(|| err("its buffer view lies outside its buffer".into()))
+        }
+        gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+            Some(rest) => {
+                let (_, b64) = rest
+                    .split_once(";base64,")
+                    .ok_or_else(|| err("a data: URI that is not base64".into()))?;
+                use base64::Engine as _;
+                base64::engine::general_purpose::STANDARD
+                    .decode(b64)
+                    .map_err(|e| err(format!("bad base64: {e}")))
+            }
+            None => {
+                *self_contained = false;
+                read(&folder.join(uri)).map_err(|e| err(format!("{uri}: {e}")))
+            }
+        },
+    }
 }
 
 #[derive(Default)]
@@ -234,18 +338,23 @@ struct LeftOut {
     modes: usize,
     skins: usize,
     morphs: usize,
+    no_uvs: usize,
 }
 
-/// One mesh's primitives, placed by `m`, appended to `out`.
+/// One mesh's primitives, placed by `m`, appended to `out` (`textured`: per material,
+/// whether it has a texture, so whether coordinates are read).
+#[allow(clippy::too_many_arguments)]
 fn add_mesh(
     mesh: &gltf::Mesh<'_>,
     m: &DMat4,
     buffers: &[Vec<u8>],
     normals: Normals,
     default_material: u32,
+    textured: &[bool],
     out: &mut GltfMesh,
     left: &mut LeftOut,
 ) -> Result<(), GltfError> {
+    let any_textured = textured.iter().any(|&t| t);
     let identity = *m == DMat4::IDENTITY;
     let normal_m: DMat3 = DMat3::from_mat4(*m).inverse().transpose();
     for (pi, prim) in mesh.primitives().enumerate() {
@@ -316,6 +425,28 @@ fn add_mesh(
             .material()
             .index()
             .map_or(default_material, |k| k as u32);
+        // Texture coordinates, v turned up, for every triangle once any material is
+        // textured (so that `uvs` lines up with `triangles`).
+        let mut tex: Vec<[f32; 2]> = Vec::new();
+        if any_textured {
+            match reader.read_tex_coords(0) {
+                Some(tc) => {
+                    tex = tc.into_f32().map(|[u, v]| [u, 1.0 - v]).collect();
+                    if tex.len() != n as usize {
+                        return Err(err("TEXCOORD_0 and POSITION have different counts".into()));
+                    }
+                    if let Some(k) = tex.iter().position(|t| !t.iter().all(|x| x.is_finite())) {
+                        return Err(err(format!("TEXCOORD_0 {k} is not finite")));
+                    }
+                }
+                None => {
+                    if textured[material as usize] {
+                        left.no_uvs += 1;
+                    }
+                    tex = vec![[0.0; 2]; n as usize];
+                }
+            }
+        }
         for t in indices.chunks_exact(3) {
             if let Some(&bad) = t.iter().find(|&&k| k >= n) {
                 return Err(err(format!(
@@ -324,6 +455,11 @@ fn add_mesh(
             }
             let tri = [first + t[0], first + t[1], first + t[2]];
             out.parsed.triangles.push(tri);
+            if any_textured {
+                out.parsed
+                    .uvs
+                    .push([t[0], t[1], t[2]].map(|k| tex[k as usize]));
+            }
             out.triangle_material.push(material);
             if normals == Normals::Read {
                 out.parsed.normal_ix.push(tri.map(|k| {

@@ -11,7 +11,11 @@ use toml::Spanned;
 
 use super::format::MeshFile;
 use super::obj::{NO_NORMAL, Normals, ObjError, Parsed};
-use super::{Material, Model, ReadError, SceneError, SmoothNormals, Triangle, Validator, line_of};
+use super::texture::{TextureError, TextureSet};
+use super::{
+    Material, Model, ReadError, SceneError, SmoothNormals, TextureCoords, Triangle, Validator,
+    line_of,
+};
 use crate::cache::{Cache, Key};
 
 /// What is wrong with a mesh file (an OBJ, or the MTL it names), in its own terms: where
@@ -107,6 +111,28 @@ pub enum MeshError {
         /// The object's positions.
         vertices: usize,
     },
+    /// A face of a tobj object names a texture coordinate the file does not have.
+    #[error(
+        "object {object:?}, face {face}: texture coordinate index {index} is out of range (the file has {texcoords})"
+    )]
+    TexcoordIndex {
+        /// The object's name.
+        object: String,
+        /// The triangle, from 0 within the object.
+        face: usize,
+        /// The index, from 1.
+        index: usize,
+        /// The file's texture coordinates.
+        texcoords: usize,
+    },
+    /// A face of a tobj object has a texture coordinate that is not finite.
+    #[error("object {object:?}, face {face}: a texture coordinate is not finite")]
+    TexcoordValue {
+        /// The object's name.
+        object: String,
+        /// The triangle, from 0 within the object.
+        face: usize,
+    },
     /// A triangle of a tobj object cannot be placed.
     #[error("object {object:?}, face {face}: {why}")]
     ObjectFace {
@@ -137,6 +163,14 @@ pub enum MeshError {
     /// A glTF file is wrong.
     #[error("{0}")]
     Gltf(super::GltfError),
+    /// A texture an MTL or a glTF names cannot be used.
+    #[error("texture {path}: {error}")]
+    Texture {
+        /// The image, as found (next to the MTL, or the glTF).
+        path: PathBuf,
+        /// Why.
+        error: TextureError,
+    },
     /// A PLY mesh without `material =` (PLY files carry no materials).
     #[error("a PLY file has no materials: name one with `material =`")]
     PlyMaterial,
@@ -293,22 +327,20 @@ pub(super) fn load(
     v: &Validator<'_>,
     i: usize,
     m: &MeshFile,
-    materials: &mut Vec<Material>,
-    triangles: &mut Vec<Triangle>,
-    smooth: &mut Vec<SmoothNormals>,
-    warnings: &mut Vec<String>,
+    mut out: Out<'_>,
 ) -> Result<(), SceneError> {
     let entry = Entry::new(v, i, m);
-    let mut out = Out {
-        materials,
-        triangles,
-        smooth,
-        warnings,
-    };
     let raw = crate::stages::time("read", || (v.read)(&entry.obj_path))
         .map_err(|e| entry.fail(MeshError::Read(e)))?;
     let xf = mesh_transform(v, i, m)?;
-    let cached = entry.cache_key(&raw, &xf);
+    // A textured material needs the file's texture coordinates: such a mesh is neither
+    // cached (the cache holds positions) nor read by glint's OBJ reader (which skips `vt`).
+    let named_textured = m.material.as_ref().is_some_and(|name| {
+        out.materials
+            .iter()
+            .any(|x| x.name == *name.get_ref() && x.maps() != (None, None))
+    });
+    let cached = entry.cache_key(&raw, &xf).filter(|_| !named_textured);
     if let (Some(name), Some((cache, key))) = (&m.material, &cached)
         && let Some(hit) = crate::stages::time("cache read", || CachedMesh::load(cache, key))
     {
@@ -345,7 +377,7 @@ pub(super) fn load(
             line: super::error::line_of_bytes(&bytes, e.valid_up_to()),
         })
     })?;
-    if let Some(name) = &m.material {
+    if let Some(name) = m.material.as_ref().filter(|_| !named_textured) {
         let parsed = match early {
             Some(parsed) => parsed,
             None => crate::stages::time("OBJ parse", || super::obj::parse(text, entry.normals)),
@@ -377,11 +409,19 @@ struct Entry<'e> {
 }
 
 /// What a mesh entry adds to: the scene's lists as far as they are built.
-struct Out<'o> {
-    materials: &'o mut Vec<Material>,
-    triangles: &'o mut Vec<Triangle>,
-    smooth: &'o mut Vec<SmoothNormals>,
-    warnings: &'o mut Vec<String>,
+pub(super) struct Out<'o> {
+    /// The scene's materials (a mesh's own are appended).
+    pub materials: &'o mut Vec<Material>,
+    /// The scene's triangles.
+    pub triangles: &'o mut Vec<Triangle>,
+    /// The smooth triangles' normals.
+    pub smooth: &'o mut Vec<SmoothNormals>,
+    /// The textured triangles' coordinates.
+    pub uvs: &'o mut Vec<TextureCoords>,
+    /// The textures read so far.
+    pub textures: &'o mut TextureSet,
+    /// The scene's warnings.
+    pub warnings: &'o mut Vec<String>,
 }
 
 /// The faces of fewer than three vertices that a mesh dropped: how many, and the line of
@@ -459,7 +499,18 @@ impl<'e> Entry<'e> {
             return self.add_parsed(name, g.parsed, xf, cached, out);
         }
         let base = out.materials.len() as u32;
-        for (k, (name, c)) in g.materials.iter().enumerate() {
+        let mut images: Vec<Option<u32>> = vec![None; g.images.len()];
+        for (k, image) in g.images.into_iter().enumerate() {
+            if let Some((path, bytes)) = image {
+                let id = out
+                    .textures
+                    .add_bytes(&path, &bytes)
+                    .map_err(|error| self.fail(MeshError::Texture { path, error }))?;
+                images[k] = Some(id);
+            }
+        }
+        for (k, gm) in g.materials.iter().enumerate() {
+            let (name, c) = (&gm.name, &gm.base_colour);
             // The scene's own colour check, for the materials the scene takes from the file.
             super::validate::colour(*c).map_err(|message| {
                 self.fail(MeshError::Gltf(super::GltfError::Material {
@@ -476,6 +527,8 @@ impl<'e> Entry<'e> {
                 ks: [0.0; 3],
                 n: 0.0,
                 optics: super::Optics::default(),
+                map_kd: gm.texture.and_then(|i| images[i]),
+                map_ka: None,
             });
         }
         self.add_placed(g.parsed, xf, base, Some(&g.triangle_material), None, out)
@@ -599,14 +652,48 @@ impl<'e> Entry<'e> {
             });
         }
         let short = ShortFaces::of(&parsed.short_faces);
-        drop(parsed);
+        let uvs = parsed.uvs;
+        drop((
+            parsed.vertices,
+            parsed.triangles,
+            parsed.normals,
+            parsed.normal_ix,
+        ));
         let before = out.triangles.len();
         if out.triangles.is_empty() {
             *out.triangles = placed; // moved, not copied (35 MB for the dragon)
         } else {
             out.triangles.extend(placed);
         }
+        let end = out.triangles.len();
+        self.add_uvs(before..end, uvs, out);
         self.complete(before, short, corner, out)
+    }
+
+    /// The texture coordinates of the triangles in `range` (`uvs`, one per triangle, or
+    /// none), kept where some of those triangles' materials are textured; a warning where
+    /// they are textured and the file has no coordinates.
+    fn add_uvs(&self, range: std::ops::Range<usize>, uvs: Vec<[[f32; 2]; 3]>, out: &mut Out<'_>) {
+        let textured = |t: &Triangle| out.materials[t.material as usize].maps() != (None, None);
+        let added = &out.triangles[range.clone()];
+        let Some(first) = added.iter().position(textured) else {
+            return;
+        };
+        if uvs.len() == added.len() {
+            out.uvs.push(TextureCoords {
+                first: range.start,
+                uvs,
+            });
+            return;
+        }
+        let name = &out.materials[added[first].material as usize].name;
+        out.warnings.push(format!(
+            "{}:{}: {}: {}: material {name:?} is textured but the file has no texture coordinates: untextured",
+            self.v.path.display(),
+            self.line,
+            self.key,
+            self.obj_path.display()
+        ));
     }
 
     /// A mesh that tobj reads (`bytes`, whose `text` glint's reader checks first, so that
@@ -635,7 +722,7 @@ impl<'e> Entry<'e> {
             (None, Ok(m)) => m,
             (None, Err(e)) => return Err(self.fail(e)),
         };
-        self.add_mtl_materials(&mtl, out.materials)
+        self.add_mtl_materials(&mtl, out.materials, out.textures)
             .map_err(|e| self.fail(e))?;
         crate::stages::record("OBJ parse", t_parse.elapsed());
         let before = out.triangles.len();
@@ -644,10 +731,13 @@ impl<'e> Entry<'e> {
             (None, Some(id)) if id < mtl.len() => Some(mtl_base + id as u32),
             _ => None,
         };
-        crate::stages::time("transform", || {
+        let runs = crate::stages::time("transform", || {
             place_models(&models, material, xf, out.triangles)
         })
         .map_err(|e| self.fail(e))?;
+        for (range, uvs) in runs {
+            self.add_uvs(range, uvs, out);
+        }
         let corner = match self.normals {
             Normals::Read => {
                 // glint's reader gives tobj's triangles in tobj's order (tested in `obj`),
@@ -722,7 +812,17 @@ impl<'e> Entry<'e> {
         &self,
         mtl: &[tobj::Material],
         materials: &mut Vec<Material>,
+        textures: &mut TextureSet,
     ) -> Result<(), MeshError> {
+        let dir = self.obj_path.parent().unwrap_or(Path::new("."));
+        let mut map = |file: &Option<String>| -> Result<Option<u32>, MeshError> {
+            let Some(file) = file else { return Ok(None) };
+            let path = dir.join(file.trim());
+            textures
+                .add(&path, self.v.read)
+                .map(Some)
+                .map_err(|error| MeshError::Texture { path, error })
+        };
         for (k, mm) in mtl.iter().enumerate() {
             let ka = mm.ambient.unwrap_or([0.0; 3]);
             let kd = mm.diffuse.unwrap_or([0.8; 3]);
@@ -756,6 +856,8 @@ impl<'e> Entry<'e> {
                 ks,
                 n,
                 optics: super::Optics::default(),
+                map_kd: map(&mm.diffuse_texture)?,
+                map_ka: map(&mm.ambient_texture)?,
             });
         }
         Ok(())
@@ -845,14 +947,19 @@ fn place_parsed(
 }
 
 /// tobj's objects placed by `xf` into `triangles`, each of its `material` (an error where
-/// it has none).
+/// it has none); for each object, the range of its triangles and their texture coordinates
+/// (none where it has no `vt`).
+#[allow(clippy::type_complexity)]
 fn place_models(
     models: &[tobj::Model],
     material: impl Fn(&tobj::Model) -> Option<u32>,
     xf: &Transform,
     triangles: &mut Vec<Triangle>,
-) -> Result<(), MeshError> {
+) -> Result<Vec<(std::ops::Range<usize>, Vec<[[f32; 2]; 3]>)>, MeshError> {
+    let mut runs = Vec::new();
     for model in models {
+        let start = triangles.len();
+        let uvs = model_uvs(model)?;
         let mesh = &model.mesh;
         let object = || model.name.clone();
         let material = material(model).ok_or_else(|| MeshError::NoMaterial { object: object() })?;
@@ -882,8 +989,44 @@ fn place_models(
             })?;
             triangles.push(Triangle { vertices, material });
         }
+        runs.push((start..triangles.len(), uvs));
     }
-    Ok(())
+    Ok(runs)
+}
+
+/// A tobj object's texture coordinates, per triangle (none where it has none).
+fn model_uvs(model: &tobj::Model) -> Result<Vec<[[f32; 2]; 3]>, MeshError> {
+    let mesh = &model.mesh;
+    if mesh.texcoords.is_empty() || mesh.texcoord_indices.len() != mesh.indices.len() {
+        return Ok(Vec::new());
+    }
+    let n = mesh.texcoords.len() / 2;
+    mesh.texcoord_indices
+        .chunks_exact(3)
+        .enumerate()
+        .map(|(f, tri)| {
+            let mut uv = [[0.0f32; 2]; 3];
+            for (slot, &ix) in uv.iter_mut().zip(tri) {
+                let ix = ix as usize;
+                if ix >= n {
+                    return Err(MeshError::TexcoordIndex {
+                        object: model.name.clone(),
+                        face: f,
+                        index: ix + 1,
+                        texcoords: n,
+                    });
+                }
+                *slot = [mesh.texcoords[2 * ix], mesh.texcoords[2 * ix + 1]];
+                if !slot.iter().all(|x| x.is_finite()) {
+                    return Err(MeshError::TexcoordValue {
+                        object: model.name.clone(),
+                        face: f,
+                    });
+                }
+            }
+            Ok(uv)
+        })
+        .collect()
 }
 
 /// The mesh entry's transform, its values checked.

@@ -8,7 +8,8 @@ mod mesh;
 mod obj;
 mod ply;
 pub mod range;
-mod validate;
+pub mod texture;
+pub(crate) mod validate;
 
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -20,6 +21,7 @@ pub use gltf::GltfError;
 pub use mesh::{FaceError, MeshError};
 pub use obj::ObjError;
 pub use ply::PlyError;
+pub use texture::{Texture, TextureError};
 use toml::Spanned;
 
 /// The largest width or height accepted (the GPU renders larger frames in tiles).
@@ -170,6 +172,19 @@ pub struct Material {
     pub n: f32,
     /// What it does to secondary rays (nothing by default).
     pub optics: Optics,
+    /// The texture (an index into `Scene::textures`) whose colour multiplies kd on
+    /// textured triangles, and ka too unless `map_ka` is set.
+    pub map_kd: Option<u32>,
+    /// The texture whose colour multiplies ka on textured triangles.
+    pub map_ka: Option<u32>,
+}
+
+impl Material {
+    /// The textures that multiply (ka, kd): `map_ka` or else `map_kd` for ka (POV-Ray's
+    /// pigment: the texture colours the ambient term too), `map_kd` for kd.
+    pub fn maps(&self) -> (Option<u32>, Option<u32>) {
+        (self.map_ka.or(self.map_kd), self.map_kd)
+    }
 }
 
 /// What a material does to secondary rays (Whitted): the local terms stay what they are,
@@ -238,6 +253,16 @@ pub struct SmoothNormals {
     pub normals: Vec<[[f32; 3]; 3]>,
 }
 
+/// The texture coordinates of a run of textured triangles (a mesh's, or one
+/// `[[triangles]]` entry's).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureCoords {
+    /// Index in `Scene::triangles` of the run's first triangle.
+    pub first: usize,
+    /// (u, v) at a, b and c of each triangle of the run, in order; v up (OBJ's convention).
+    pub uvs: Vec<[[f32; 2]; 3]>,
+}
+
 /// A loaded, validated scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -267,6 +292,13 @@ pub struct Scene {
     pub triangles: Vec<Triangle>,
     /// The vertex normals of the meshes marked `smooth`, in mesh order.
     pub smooth: Vec<SmoothNormals>,
+    /// The texture coordinates of the triangles that have them, in triangle order.
+    pub uvs: Vec<TextureCoords>,
+    /// The textures the materials name (decoded, linear, within the texel budget).
+    pub textures: Vec<Texture>,
+    /// Every file the scene was read from, in the order read: the scene file, then its
+    /// meshes, MTLs, textures and glTF buffers (what a viewer watches for changes).
+    pub inputs: Vec<PathBuf>,
     /// Things that are allowed but probably not meant (zero-area triangles, ...), each
     /// naming file, line and key.
     pub warnings: Vec<String>,
@@ -368,14 +400,26 @@ impl Scene {
         options: &LoadOptions,
     ) -> Result<Scene, SceneError> {
         let file: SceneFile = toml::from_str(src).map_err(|e| syntax_error(src, path, &e))?;
-        Validator {
+        let inputs = std::cell::RefCell::new(vec![path.to_owned()]);
+        let recording = |p: &Path| {
+            inputs.borrow_mut().push(p.to_owned());
+            read(p)
+        };
+        let mut scene = Validator {
             src,
             path,
-            read,
+            read: &recording,
             limit: options.max_input_bytes,
             cache: options.cache.as_ref(),
         }
-        .scene(file)
+        .scene(file)?;
+        let mut seen = std::collections::HashSet::new();
+        scene.inputs = inputs
+            .into_inner()
+            .into_iter()
+            .filter(|p| seen.insert(p.clone()))
+            .collect();
+        Ok(scene)
     }
 
     /// The sizes the scene's camera asks for.
@@ -655,9 +699,10 @@ impl Validator<'_> {
             lights.push(self.light(i, l)?);
         }
 
+        let mut textures = texture::TextureSet::default();
         let mut materials = Vec::new();
         for (name, m) in &f.materials {
-            materials.push(self.material(name, m)?);
+            materials.push(self.material(name, m, &mut textures)?);
         }
         if lights.is_empty() && materials.iter().any(|m| m.model != Model::Ambient) {
             warnings.push(format!(
@@ -693,6 +738,7 @@ impl Validator<'_> {
         }
 
         let mut triangles = Vec::new();
+        let mut uvs = Vec::new();
         let mut triangle_sources = Vec::new();
         for (i, t) in f.triangles.iter().enumerate() {
             let t = t.get_ref();
@@ -710,6 +756,36 @@ impl Validator<'_> {
             }
             let material =
                 self.material_index(&names, &t.material, &format!("triangles[{i}].material"))?;
+            let textured = materials[material as usize].maps() != (None, None);
+            match &t.uvs {
+                Some(uv) => {
+                    let key = format!("triangles[{i}].uvs");
+                    let u = *uv.get_ref();
+                    if u.iter().flatten().any(|x| !x.is_finite()) {
+                        return self.err(uv.span(), &key, format!("{u:?} is not finite"));
+                    }
+                    if textured {
+                        uvs.push(TextureCoords {
+                            first: triangles.len(),
+                            uvs: vec![u],
+                        });
+                    } else {
+                        warnings.push(format!(
+                            "{}:{}: {key}: material {:?} has no map_kd or map_ka: unused",
+                            self.path.display(),
+                            line_of(self.src, uv.span().start),
+                            t.material.get_ref()
+                        ));
+                    }
+                }
+                None if textured => warnings.push(format!(
+                    "{}:{}: triangles[{i}].uvs: material {:?} is textured but the triangle has no uvs: untextured",
+                    self.path.display(),
+                    line_of(self.src, t.vertices.span().start),
+                    t.material.get_ref()
+                )),
+                None => {}
+            }
             triangle_sources.push((
                 triangles.len(),
                 format!(
@@ -739,12 +815,18 @@ impl Validator<'_> {
                 self,
                 i,
                 m.get_ref(),
-                &mut materials,
-                &mut triangles,
-                &mut smooth,
-                &mut warnings,
+                mesh::Out {
+                    materials: &mut materials,
+                    triangles: &mut triangles,
+                    smooth: &mut smooth,
+                    uvs: &mut uvs,
+                    textures: &mut textures,
+                    warnings: &mut warnings,
+                },
             )?;
         }
+        let (textures, downscaled) = textures.into_fitted();
+        warnings.extend(downscaled);
 
         Ok(Scene {
             path: self.path.to_owned(),
@@ -760,6 +842,9 @@ impl Validator<'_> {
             spheres,
             triangles,
             smooth,
+            uvs,
+            textures,
+            inputs: Vec::new(),
             warnings,
             sphere_sources,
             triangle_sources,
@@ -888,6 +973,7 @@ impl Validator<'_> {
         &self,
         name: &str,
         m: &Spanned<format::MaterialFile>,
+        textures: &mut texture::TextureSet,
     ) -> Result<Material, SceneError> {
         let span = m.span();
         let m = m.get_ref();
@@ -925,6 +1011,17 @@ impl Validator<'_> {
             }
             None => 1.0,
         };
+        let mut map = |v: &Option<Spanned<String>>, k: &str| -> Result<Option<u32>, SceneError> {
+            let Some(file) = v else { return Ok(None) };
+            let base = self.path.parent().unwrap_or(Path::new("."));
+            let path = base.join(file.get_ref());
+            textures
+                .add(&path, self.read)
+                .map(Some)
+                .or_else(|e| self.err(file.span(), &key(k), format!("{}: {e}", path.display())))
+        };
+        let map_kd = map(&m.map_kd, "map_kd")?;
+        let map_ka = map(&m.map_ka, "map_ka")?;
         Ok(Material {
             name: name.to_string(),
             model,
@@ -933,6 +1030,8 @@ impl Validator<'_> {
             ks,
             n,
             optics: self.optics(name, m)?,
+            map_kd,
+            map_ka,
         })
     }
 

@@ -23,6 +23,9 @@ pub struct Parsed {
     /// Per triangle, each corner's index into `normals`, or [`NO_NORMAL`] where the face
     /// gives none; empty when normals were not asked for.
     pub normal_ix: Vec<[u32; 3]>,
+    /// Per triangle, (u, v) at each corner (v up); empty when the file has none (glint's
+    /// OBJ reader never reads them: a textured OBJ goes to tobj).
+    pub uvs: Vec<[[f32; 2]; 3]>,
 }
 
 /// `Parsed::normal_ix` of a corner without a `vn` index.
@@ -422,6 +425,7 @@ fn join(
         short_faces,
         normals: all_normals,
         normal_ix,
+        uvs: Vec::new(),
     }))
 }
 

@@ -4,11 +4,12 @@
 //!
 //! - **Vertices**: the `vertex` element's `x`, `y`, `z` of any scalar type (a `double` is
 //!   rounded to f32 once; an ASCII `float` is parsed straight to f32, as the OBJ reader
-//!   parses its text). `nx`, `ny`, `nz` are read for a smooth mesh: a zero normal is
+//!   parses its text). `u v` (or `s t`, `texture_u texture_v`) are the texture
+//!   coordinates, v up, as OBJ's. `nx`, `ny`, `nz` are read for a smooth mesh: a zero normal is
 //!   computed from the faces as a missing one is; one that is not finite is an error.
 //! - **Faces**: the `face` element's list `vertex_indices` (or `vertex_index`), counts and
 //!   indices of any integer type; polygons fanned from their first vertex, as OBJ's are.
-//! - **Everything else** (other properties, other elements, texture coordinates) is read
+//! - **Everything else** (other properties, other elements) is read
 //!   past. Nothing is allocated from a count before the file is seen to hold that much.
 //! - **Errors** name the header line, or the element and its index (from 0).
 
@@ -91,7 +92,7 @@ impl Scalar {
 /// What glint does with a property.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Use {
-    /// A vertex's position (0..3) or normal (3..6) component.
+    /// A vertex's position (0..3), normal (3..6) or texture coordinate (6..8) component.
     Slot(usize),
     /// The face's corner list.
     Corners,
@@ -230,6 +231,8 @@ fn header(bytes: &[u8], normals: Normals) -> Result<Header, PlyError> {
                     ("vertex", "nx") if normals == Normals::Read => Use::Slot(3),
                     ("vertex", "ny") if normals == Normals::Read => Use::Slot(4),
                     ("vertex", "nz") if normals == Normals::Read => Use::Slot(5),
+                    ("vertex", "u" | "s" | "texture_u" | "texture_s") => Use::Slot(6),
+                    ("vertex", "v" | "t" | "texture_v" | "texture_t") => Use::Slot(7),
                     _ => Use::Skip,
                 };
                 e.props.push(Property::Scalar(t, slot));
@@ -426,8 +429,11 @@ pub fn parse(bytes: &[u8], normals: Normals) -> Result<Parsed, PlyError> {
         short_faces: Vec::new(),
         normals: Vec::new(),
         normal_ix: Vec::new(),
+        uvs: Vec::new(),
     };
     let mut has_normals = false;
+    let mut has_uvs = false;
+    let mut texcoords: Vec<[f32; 2]> = Vec::new();
     let mut corners: Vec<u32> = Vec::new();
     for e in &h.elements {
         let err = |index: usize, message: String| PlyError::Element {
@@ -468,12 +474,19 @@ pub fn parse(bytes: &[u8], normals: Normals) -> Result<Parsed, PlyError> {
             if has_normals {
                 out.normals.reserve(e.count);
             }
+            has_uvs = e
+                .props
+                .iter()
+                .any(|p| matches!(p, Property::Scalar(_, Use::Slot(6..=7))));
+            if has_uvs {
+                texcoords.reserve(e.count);
+            }
         }
         if is_face {
             out.triangles.reserve(e.count);
         }
         for index in 0..e.count {
-            let mut slots = [0.0f32; 6];
+            let mut slots = [0.0f32; 8];
             corners.clear();
             for p in &e.props {
                 match *p {
@@ -523,6 +536,16 @@ pub fn parse(bytes: &[u8], normals: Normals) -> Result<Parsed, PlyError> {
                     }
                     out.normals.push(n);
                 }
+                if has_uvs {
+                    let uv = [slots[6], slots[7]];
+                    if uv.iter().any(|x| !x.is_finite()) {
+                        return Err(err(
+                            index,
+                            format!("the texture coordinate {uv:?} is not finite"),
+                        ));
+                    }
+                    texcoords.push(uv);
+                }
             }
             if is_face {
                 if corners.len() < 3 {
@@ -536,6 +559,13 @@ pub fn parse(bytes: &[u8], normals: Normals) -> Result<Parsed, PlyError> {
                 }
             }
         }
+    }
+    if has_uvs {
+        out.uvs = out
+            .triangles
+            .iter()
+            .map(|t| t.map(|k| texcoords[k as usize]))
+            .collect();
     }
     if normals == Normals::Read {
         out.normal_ix = out

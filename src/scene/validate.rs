@@ -55,7 +55,7 @@ pub(super) fn samples(n: i64) -> Result<u32, String> {
 }
 
 /// Which camera key a bad view names.
-pub(super) enum ViewFault {
+pub(crate) enum ViewFault {
     /// `camera.look_at` equals `camera.eye`.
     LookAt(String),
     /// `camera.up` is zero or parallel to the view.
@@ -64,7 +64,7 @@ pub(super) enum ViewFault {
 
 /// The camera's basis, checked in f64: the view must have a length and up must not be
 /// parallel to it.
-pub(super) fn view(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> Result<(), ViewFault> {
+pub(crate) fn view(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> Result<(), ViewFault> {
     let d = [
         look_at[0] as f64 - eye[0] as f64,
         look_at[1] as f64 - eye[1] as f64,

@@ -162,7 +162,48 @@ pub struct Triangle {
     pub normals: u32,
     /// Third vertex. Offset 32.
     pub c: [f32; 3],
-    /// Offset 44.
+    /// Index of its [`TriangleUvs`] in the uvs buffer, or [`NO_UVS`] (0: the buffer's
+    /// entry 0 is never used) for an untextured triangle. Read only when the pipeline's
+    /// `TEXTURES` is on. Offset 44.
+    pub uvs: u32,
+}
+
+/// `Triangle::uvs` of an untextured triangle. WGSL: `NO_UVS`.
+pub const NO_UVS: u32 = 0;
+
+/// `TriangleUvs::map_kd` or `map_ka` where the material has no such map. WGSL: `NO_TEXTURE`.
+pub const NO_TEXTURE: u32 = 0xffff_ffff;
+
+/// A textured triangle's texture coordinates at a, b and c (v up, OBJ's convention) and
+/// the textures its material applies. Must match WGSL `struct TriangleUvs` (32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriangleUvs {
+    /// (u, v) at a. Offset 0.
+    pub uv_a: [f32; 2],
+    /// (u, v) at b. Offset 8.
+    pub uv_b: [f32; 2],
+    /// (u, v) at c. Offset 16.
+    pub uv_c: [f32; 2],
+    /// The texture that multiplies kd (an index into the textures buffer), or
+    /// [`NO_TEXTURE`]. Offset 24.
+    pub map_kd: u32,
+    /// The texture that multiplies ka, or [`NO_TEXTURE`]. Offset 28.
+    pub map_ka: u32,
+}
+
+/// Where a texture's texels lie in the texels buffer. Must match WGSL `struct Texture`
+/// (16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Texture {
+    /// The index in the texels buffer (of f32s) of its first texel's red. Offset 0.
+    pub offset: u32,
+    /// Texels a row. Offset 4.
+    pub width: u32,
+    /// Rows, bottom (v = 0) first. Offset 8.
+    pub height: u32,
+    /// Offset 12.
     pub _pad0: u32,
 }
 

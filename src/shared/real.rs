@@ -54,6 +54,11 @@ pub trait Real:
     fn abs(self) -> Self;
     /// `self^e` (libm's `pow`).
     fn powf(self, e: Self) -> Self;
+    /// The largest integer not above `self` (exact).
+    fn floor(self) -> Self;
+    /// WGSL `i32(x)`: towards zero, saturating (exact for the integers below 2^24 that
+    /// the texture lookup converts).
+    fn to_i32(self) -> i32;
 }
 
 impl Real for f32 {
@@ -86,6 +91,12 @@ impl Real for f32 {
     fn powf(self, e: Self) -> Self {
         f32::powf(self, e)
     }
+    fn floor(self) -> Self {
+        f32::floor(self)
+    }
+    fn to_i32(self) -> i32 {
+        self as i32
+    }
 }
 
 impl Real for f64 {
@@ -117,6 +128,12 @@ impl Real for f64 {
     }
     fn powf(self, e: Self) -> Self {
         f64::powf(self, e)
+    }
+    fn floor(self) -> Self {
+        f64::floor(self)
+    }
+    fn to_i32(self) -> i32 {
+        self as i32
     }
 }
 

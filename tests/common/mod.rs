@@ -251,9 +251,9 @@ use glint::scene::{Scene, TriangleAlgorithm};
 pub const SEED_SCENES: [&str; 5] = ["sphere", "triangle", "umbrella", "bb8", "mitsubishi"];
 
 /// Every scene in `scenes/` that needs no fetched mesh: the seed scenes, their shadowed,
-/// antialiased and mirrored variants, the Whitted scene, the PLY scene and the spot-lit
-/// scene (the README shows each).
-pub const SHIPPED_SCENES: [&str; 12] = [
+/// antialiased and mirrored variants, the Whitted scene, the PLY scene, the spot-lit scene
+/// and the textured scene (the README shows each).
+pub const SHIPPED_SCENES: [&str; 13] = [
     "sphere",
     "triangle",
     "umbrella",
@@ -266,6 +266,7 @@ pub const SHIPPED_SCENES: [&str; 12] = [
     "bb8-mirror",
     "suzanne-ply",
     "spot",
+    "textured",
 ];
 
 /// Writes into `dir` a scene of 30,000 small ambient triangles (`many.obj`, 1.44 MB of

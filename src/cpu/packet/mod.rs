@@ -95,8 +95,8 @@ pub fn trace_packet(g: &Globals<f32>, i: u32, j: u32, simd: Simd) -> [[f32; 4]; 
 }
 
 /// The mirror's own `trace_pixel` for each pixel of the block, in a packet's lanes: what
-/// the packet tracer is for scenes with directional or spot lights, which only the mirror
-/// shades (so the packet path of every other scene is compiled as it was).
+/// the packet tracer is for scenes with directional or spot lights or with textures, which
+/// only the mirror shades (so the packet path of every other scene is compiled as it was).
 pub fn trace_packet_mirror(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES] {
     let mut out = [[0.0f32; 4]; LANES];
     for (l, px) in out.iter_mut().enumerate() {
