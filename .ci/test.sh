@@ -2,7 +2,8 @@
 # glint's test command (README: "Run the tests").
 #
 # 1. On a machine with no Vulkan driver it installs Mesa's lavapipe (a CPU Vulkan) first.
-# 2. fmt, clippy -D warnings, then the whole suite on the system's lavapipe.
+# 2. fmt, clippy -D warnings, then the whole suite on the system's lavapipe (with Xvfb and
+#    xdotool installed first for `glint view`'s window tests).
 # 3. Pass 4: the Python package, `pip install ./python[test]` into a fresh venv, and pytest.
 # 4. Every test binary with GPU tests again on Mesa 25.0's lavapipe and on Mesa 26.1's,
 #    which `.ci/lavapipe.sh` provides without touching the system (Debian 12: from
@@ -32,6 +33,22 @@ if [ "$skip_gpu" = 0 ] && ! have_vulkan; then
     export DEBIAN_FRONTEND=noninteractive
     $sudo apt-get update -qq
     $sudo apt-get install -y -qq mesa-vulkan-drivers libvulkan1 >/dev/null
+fi
+# `glint view`'s tests (tests/view.rs) open a real window under Xvfb and drive it with
+# xdotool, and read the screen back with xwd (x11-apps); the window needs X11's client
+# libraries.
+view_pkgs=(xvfb xauth xdotool x11-apps libx11-xcb1 libxcursor1 libxi6 libxkbcommon-x11-0)
+missing=()
+for p in "${view_pkgs[@]}"; do
+    dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+    echo "glint: installing ${missing[*]} for the viewer's tests"
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 export GLINT_ADAPTER="${GLINT_ADAPTER:-llvmpipe}"
 # The tests start a Vulkan device in many processes: Mesa prints a conformance warning for

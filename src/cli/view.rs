@@ -243,7 +243,13 @@ impl ApplicationHandler<UserEvent> for App {
                     self.request_redraw();
                 }
             }
-            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+            // Synthetic presses (winit's, for keys held when the window gains focus) are
+            // not the user's: a key pressed just as the window was focused came twice.
+            WindowEvent::KeyboardInput {
+                event,
+                is_synthetic: false,
+                ..
+            } if event.state == ElementState::Pressed => {
                 if let PhysicalKey::Code(code) = event.physical_key {
                     self.key(event_loop, code);
                 }

@@ -1,0 +1,417 @@
+//! `glint view` in a real window, under Xvfb (the `xvfb` and `xdotool` packages, which
+//! `.ci/test.sh` installs): the picture presented equals `glint render`'s PNG byte for
+//! byte, for one sample a pixel and after an antialiased scene's refinement; a saved scene
+//! reloads (a changed light colour), a broken one keeps the viewer running with its error
+//! shown until it is fixed; a scripted orbit leaves a camera that renders the same in a
+//! scene file; no display is a one-line error.
+
+mod common;
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+use common::{Scratch, glint_command};
+
+/// An X server of the test's own on a free display number; killed when dropped.
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Xvfb {
+        for n in 0..50 {
+            let k = 100 + (std::process::id() as usize + n * 7) % 400;
+            if Path::new(&format!("/tmp/.X11-unix/X{k}")).exists()
+                || Path::new(&format!("/tmp/.X{k}-lock")).exists()
+            {
+                continue;
+            }
+            let display = format!(":{k}");
+            let child = Command::new("Xvfb")
+                .args([&display, "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .expect("Xvfb: install the xvfb package (.ci/test.sh does)");
+            let socket = format!("/tmp/.X11-unix/X{k}");
+            let t0 = Instant::now();
+            while !Path::new(&socket).exists() && t0.elapsed() < Duration::from_secs(10) {
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            assert!(Path::new(&socket).exists(), "Xvfb {display} did not start");
+            return Xvfb { child, display };
+        }
+        panic!("no free X display number");
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(format!("{name}.toml"))
+}
+
+/// `glint render SCENE -o OUT` on the CPU tracer (what `auto` picks on lavapipe).
+fn render(scene: &Path, out: &Path) -> Vec<u8> {
+    let s = glint_command()
+        .args(["render", "--backend", "cpu", "-o"])
+        .arg(out)
+        .arg(scene)
+        .output()
+        .unwrap();
+    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    std::fs::read(out).unwrap()
+}
+
+/// `glint view SCENE --frames N --screenshot OUT` under `x`: its exit status and PNG.
+fn view_frames(x: &Xvfb, scene: &Path, frames: u32, out: &Path) -> Vec<u8> {
+    let s = glint_command()
+        .env("DISPLAY", &x.display)
+        .args(["view", "--frames", &frames.to_string(), "--screenshot"])
+        .arg(out)
+        .arg(scene)
+        .output()
+        .unwrap();
+    assert!(
+        s.status.success(),
+        "glint view: {}",
+        String::from_utf8_lossy(&s.stderr)
+    );
+    std::fs::read(out).unwrap()
+}
+
+/// The presented picture of bb8 after 3 frames is `glint render`'s PNG in every byte; the
+/// antialiased bb8 after its 16 sample positions too, and after 2 it is not yet (the
+/// twin, which also shows the refinement is seen).
+#[test]
+fn the_window_shows_what_glint_render_writes() {
+    let x = Xvfb::start();
+    let dir = Scratch::new("view-shot");
+    let want = render(&scene("bb8"), &dir.join("r.png"));
+    assert!(view_frames(&x, &scene("bb8"), 3, &dir.join("v.png")) == want);
+    let want = render(&scene("bb8-aa"), &dir.join("ra.png"));
+    assert!(view_frames(&x, &scene("bb8-aa"), 16, &dir.join("va.png")) == want);
+    assert!(view_frames(&x, &scene("bb8-aa"), 2, &dir.join("vb.png")) != want);
+}
+
+/// The X server's own screen (`xwd -root`), where the window sits at (0, 0) without a
+/// window manager, holds `glint render`'s pixels: the surface, its format and the copy
+/// onto it lose nothing. The twin: a pixel changed by one step is seen.
+#[test]
+fn the_screen_holds_the_pixels_of_the_png() {
+    let x = Xvfb::start();
+    let dir = Scratch::new("view-xwd");
+    let png = render(&scene("bb8"), &dir.join("r.png"));
+    let want = image::load_from_memory(&png).unwrap().to_rgb8();
+    let v = Viewer::start(&x, &scene("bb8"), &dir);
+    // The first frame is drawn within a few milliseconds of the window; wait for it.
+    let t0 = Instant::now();
+    let mut got = grab(&x.display, want.width(), want.height());
+    while got != *want && t0.elapsed() < Duration::from_secs(20) {
+        std::thread::sleep(Duration::from_millis(100));
+        got = grab(&x.display, want.width(), want.height());
+    }
+    assert!(got == *want, "the screen differs from the PNG");
+    let mut one = got.clone();
+    one[1000] ^= 1;
+    assert!(one != *want, "the twin");
+    assert!(v.quit().success());
+}
+
+/// The top-left `w`×`h` pixels of the screen, RGB, from `xwd -root` (a ZPixmap of 32 bits a
+/// pixel with masks, after a big-endian header, its name and its colour map).
+fn grab(display: &str, w: u32, h: u32) -> Vec<u8> {
+    let out = Command::new("xwd")
+        .env("DISPLAY", display)
+        .args(["-root", "-silent"])
+        .output()
+        .expect("xwd: install the x11-apps package (.ci/test.sh does)");
+    let d = out.stdout;
+    let word = |k: usize| u32::from_be_bytes(d[4 * k..4 * k + 4].try_into().unwrap());
+    let (header, bpp, line, ncolors) = (word(0) as usize, word(11), word(12) as usize, word(19));
+    let (lsb, masks) = (word(7) == 0, [word(14), word(15), word(16)]);
+    assert_eq!(bpp, 32, "xwd: {bpp} bits a pixel");
+    let pixels = header + 12 * ncolors as usize;
+    let mut rgb = Vec::with_capacity(3 * (w * h) as usize);
+    for y in 0..h as usize {
+        for x in 0..w as usize {
+            let b: [u8; 4] = d[pixels + y * line + 4 * x..][..4].try_into().unwrap();
+            let p = if lsb {
+                u32::from_le_bytes(b)
+            } else {
+                u32::from_be_bytes(b)
+            };
+            for m in masks {
+                rgb.push(((p & m) >> m.trailing_zeros()) as u8);
+            }
+        }
+    }
+    rgb
+}
+
+/// A running viewer with its output read line by line.
+struct Viewer {
+    child: Child,
+    out: Receiver<String>,
+    err: Receiver<String>,
+    window: String,
+    display: String,
+    /// P presses so far.
+    saves: u32,
+}
+
+impl Viewer {
+    fn start(x: &Xvfb, scene: &Path, dir: &Path) -> Viewer {
+        let mut child = glint_command()
+            .current_dir(dir)
+            .env("DISPLAY", &x.display)
+            .arg("view")
+            .arg(scene)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let lines = |r: Box<dyn std::io::Read + Send>| {
+            let (tx, rx) = channel();
+            std::thread::spawn(move || {
+                for l in BufReader::new(r).lines().map_while(Result::ok) {
+                    if tx.send(l).is_err() {
+                        break;
+                    }
+                }
+            });
+            rx
+        };
+        let out = lines(Box::new(child.stdout.take().unwrap()));
+        let err = lines(Box::new(child.stderr.take().unwrap()));
+        let mut v = Viewer {
+            child,
+            out,
+            err,
+            window: String::new(),
+            display: x.display.clone(),
+            saves: 0,
+        };
+        v.wait_err("glint view:");
+        let id = Command::new("xdotool")
+            .env("DISPLAY", &x.display)
+            .args(["search", "--sync", "--name", "^glint view"])
+            .output()
+            .expect("xdotool: install the xdotool package (.ci/test.sh does)");
+        v.window = String::from_utf8_lossy(&id.stdout)
+            .lines()
+            .next()
+            .expect("the viewer's window")
+            .to_string();
+        v
+    }
+
+    fn wait(rx: &Receiver<String>, what: &str) -> String {
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(60) {
+            if let Ok(l) = rx.recv_timeout(Duration::from_millis(100))
+                && l.contains(what)
+            {
+                return l;
+            }
+        }
+        panic!("no line with {what:?} within 60 s");
+    }
+
+    fn wait_err(&mut self, what: &str) -> String {
+        Viewer::wait(&self.err, what)
+    }
+
+    fn wait_out(&mut self, what: &str) -> String {
+        Viewer::wait(&self.out, what)
+    }
+
+    fn xdotool(&self, args: &[&str]) {
+        let s = Command::new("xdotool")
+            .env("DISPLAY", &self.display)
+            .args(args)
+            .status()
+            .unwrap();
+        assert!(s.success(), "xdotool {args:?}");
+    }
+
+    fn key(&self, key: &str) {
+        let w = self.window.clone();
+        self.xdotool(&["windowfocus", "--sync", &w, "key", "--window", &w, key]);
+    }
+
+    /// P: the view saved; the file's bytes. Each press saves once (the n-th press writes
+    /// `…-view-n.png`), so a key delivered twice is seen.
+    fn save(&mut self, dir: &Path) -> Vec<u8> {
+        self.key("p");
+        self.saves += 1;
+        let line = self.wait_out("saved ");
+        let name = line.trim_start_matches("saved ").trim().to_string();
+        assert!(
+            name.ends_with(&format!("-view-{}.png", self.saves)),
+            "{name}: press {}",
+            self.saves
+        );
+        std::fs::read(dir.join(name)).unwrap()
+    }
+
+    fn running(&mut self) -> bool {
+        self.child.try_wait().unwrap().is_none()
+    }
+
+    /// Esc, and the exit status.
+    fn quit(mut self) -> std::process::ExitStatus {
+        self.key("Escape");
+        let t0 = Instant::now();
+        loop {
+            if let Some(s) = self.child.try_wait().unwrap() {
+                return s;
+            }
+            assert!(
+                t0.elapsed() < Duration::from_secs(30),
+                "the viewer did not exit"
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
+impl Drop for Viewer {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// Saving the scene with another light colour reloads it (the BVH kept) and the view then
+/// renders as the new file does; a broken file keeps the viewer running with the error
+/// on stderr (file, line, key), and fixing it brings the picture back.
+#[test]
+fn saved_scenes_reload_and_broken_ones_do_not_stop_the_viewer() {
+    let x = Xvfb::start();
+    let dir = Scratch::new("view-reload");
+    let path = dir.join("s.toml");
+    let original = std::fs::read_to_string(scene("bb8")).unwrap();
+    std::fs::write(&path, &original).unwrap();
+    let mut v = Viewer::start(&x, &path, &dir);
+    let before = v.save(&dir);
+    assert!(before == render(&path, &dir.join("r0.png")));
+    // A light's colour changed.
+    let at = original
+        .find("color = [")
+        .expect("bb8 has a coloured light");
+    let end = at + original[at..].find(']').unwrap() + 1;
+    let changed = format!(
+        "{}color = [0.2, 0.9, 0.3]{}",
+        &original[..at],
+        &original[end..]
+    );
+    std::fs::write(&path, &changed).unwrap();
+    let line = v.wait_err("reloaded");
+    assert!(line.contains("the BVH kept"), "{line}");
+    let after = v.save(&dir);
+    assert!(after == render(&path, &dir.join("r1.png")));
+    assert!(after != before, "the twin: the new colour shows");
+    // Broken, then fixed.
+    std::fs::write(&path, changed.replacen("radius = ", "radius = -", 1)).unwrap();
+    let line = v.wait_err("error:");
+    assert!(
+        line.contains("s.toml:") && line.contains(".radius"),
+        "{line}"
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(v.running(), "the viewer exited on a broken file");
+    std::fs::write(&path, &original).unwrap();
+    v.wait_err("reloaded");
+    assert!(v.save(&dir) == before);
+    assert!(v.quit().success(), "Esc exits 0");
+}
+
+/// A scripted drag with the left button orbits the camera; C prints it as a [camera]
+/// table; a scene file with that table renders what P saves. The twin: the camera moved.
+#[test]
+fn an_orbit_leaves_a_camera_that_renders_the_same() {
+    let x = Xvfb::start();
+    let dir = Scratch::new("view-orbit");
+    let path = dir.join("s.toml");
+    let original = std::fs::read_to_string(scene("bb8")).unwrap();
+    std::fs::write(&path, &original).unwrap();
+    let mut v = Viewer::start(&x, &path, &dir);
+    let w = v.window.clone();
+    v.xdotool(&[
+        "mousemove",
+        "--window",
+        &w,
+        "400",
+        "300",
+        "mousedown",
+        "1",
+        "mousemove",
+        "--window",
+        &w,
+        "470",
+        "330",
+        "mouseup",
+        "1",
+    ]);
+    std::thread::sleep(Duration::from_millis(300));
+    v.key("c");
+    let mut camera = vec![v.wait_out("[camera]")];
+    for key in ["eye", "look_at", "up", "fov", "width", "height", "samples"] {
+        camera.push(v.wait_out(&format!("{key} = ")));
+    }
+    let saved = v.save(&dir);
+    // The scene file with its [camera] table replaced by the printed one.
+    let start = original.find("[camera]").unwrap();
+    let rest = &original[start + 8..];
+    let end = start + 8 + rest.find("\n[").map_or(rest.len(), |k| k + 1);
+    let moved = format!(
+        "{}{}\n{}",
+        &original[..start],
+        camera.join("\n"),
+        &original[end..]
+    );
+    let moved_path = dir.join("moved.toml");
+    std::fs::write(&moved_path, &moved).unwrap();
+    assert!(saved == render(&moved_path, &dir.join("r.png")));
+    assert!(
+        saved != render(&path, &dir.join("r0.png")),
+        "the twin: the orbit moved the camera"
+    );
+    assert!(v.quit().success());
+}
+
+/// Without a display: one line, exit status 1, no panic.
+#[test]
+fn no_display_is_a_one_line_error() {
+    let s = glint_command()
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .args(["view"])
+        .arg(scene("bb8"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&s.stderr);
+    assert_eq!(s.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot open a window"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    // The twin: a scene that does not load is the scene's error, before any window.
+    let s = glint_command()
+        .args(["view", "no-such-scene.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(s.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&s.stderr).contains("no-such-scene.toml"));
+}
