@@ -170,27 +170,20 @@ impl SceneBuffers {
         crate::stages::record("flatten", t_flat.elapsed());
         if let Some(old) = old.filter(|o| o.spheres == spheres && o.triangles == triangles) {
             let buf = SceneBuffers {
-                params: Params {
-                    n_spheres: spheres.len() as u32,
-                    n_triangles: triangles.len() as u32,
-                    n_lights: scene.lights.len() as u32,
-                    n_nodes: old.nodes.len() as u32,
-                    samples: params.samples.max(1),
-                    ..params
-                },
-                spheres,
-                triangles,
-                materials,
-                lights,
-                nodes: old.nodes,
-                prim_ids: old.prim_ids,
                 normals,
                 uvs,
                 textures,
                 texels,
-                leaf_triangles: old.leaf_triangles,
-                triangle_algo: algo.code(),
-                shadows: scene.shadows,
+                ..SceneBuffers::with_bvh(
+                    params,
+                    spheres,
+                    triangles,
+                    materials,
+                    lights,
+                    (old.nodes, old.prim_ids),
+                    algo,
+                    scene.shadows,
+                )
             };
             return (buf, true);
         }
@@ -280,12 +273,38 @@ impl SceneBuffers {
         shadows: bool,
     ) -> Self {
         let bvh = cached_bvh(cache, &spheres, &triangles);
+        SceneBuffers::with_bvh(
+            params,
+            spheres,
+            triangles,
+            materials,
+            lights,
+            (bvh.nodes, bvh.prim_ids),
+            algo,
+            shadows,
+        )
+    }
+
+    /// The buffers of these parts over the BVH `(nodes, prim_ids)` built for them: the
+    /// counts in `params` set from the parts, `samples` at least 1, no triangle smooth or
+    /// textured.
+    #[allow(clippy::too_many_arguments)]
+    fn with_bvh(
+        params: Params,
+        spheres: Vec<Sphere>,
+        triangles: Vec<Triangle>,
+        materials: Vec<Material>,
+        lights: Vec<Light>,
+        (nodes, prim_ids): (Vec<BvhNode>, Vec<u32>),
+        algo: TriangleAlgorithm,
+        shadows: bool,
+    ) -> Self {
         SceneBuffers {
             params: Params {
                 n_spheres: spheres.len() as u32,
                 n_triangles: triangles.len() as u32,
                 n_lights: lights.len() as u32,
-                n_nodes: bvh.nodes.len() as u32,
+                n_nodes: nodes.len() as u32,
                 samples: params.samples.max(1),
                 ..params
             },
@@ -293,8 +312,8 @@ impl SceneBuffers {
             triangles,
             materials,
             lights,
-            nodes: bvh.nodes,
-            prim_ids: bvh.prim_ids,
+            nodes,
+            prim_ids,
             normals: Vec::new(),
             uvs: Vec::new(),
             textures: Vec::new(),

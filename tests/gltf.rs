@@ -135,24 +135,6 @@ fn document(
     (json, bin)
 }
 
-fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
-    let mut j = json.as_bytes().to_vec();
-    while !j.len().is_multiple_of(4) {
-        j.push(b' ');
-    }
-    let total = 12 + 8 + j.len() + 8 + bin.len();
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend((total as u32).to_le_bytes());
-    out.extend((j.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(&j);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
-}
-
 fn scene(dir: &Path, file: &str, material: bool) -> Result<Scene, SceneError> {
     let src = format!(
         r#"ambient = [0.2, 0.2, 0.2]
@@ -199,7 +181,7 @@ fn gltf_in_every_form_is_the_obj() {
     let obj = scene(&dir, "s.obj", true).unwrap();
     for width in [Width::U16, Width::U32] {
         let (json, bin) = document(&v, &f, width, "", &[], None);
-        std::fs::write(dir.join("s.glb"), glb(&json, &bin)).unwrap();
+        std::fs::write(dir.join("s.glb"), common::glb(&json, &bin)).unwrap();
         let g = scene(&dir, "s.glb", true).unwrap();
         assert_eq!(g.triangles, obj.triangles, "{width:?}");
     }
@@ -227,13 +209,13 @@ fn gltf_in_every_form_is_the_obj() {
     // No indices: corners in vertex order.
     let corners: Vec<[f32; 3]> = f.iter().flatten().map(|&k| v[k as usize]).collect();
     let (json, bin) = document(&corners, &[], Width::None, "", &[], None);
-    std::fs::write(dir.join("n.glb"), glb(&json, &bin)).unwrap();
+    std::fs::write(dir.join("n.glb"), common::glb(&json, &bin)).unwrap();
     assert_eq!(scene(&dir, "n.glb", true).unwrap().triangles, obj.triangles);
     // The twin.
     let mut g = f.clone();
     g[7][1] = g[7][2];
     let (json, bin) = document(&v, &g, Width::U32, "", &[], None);
-    std::fs::write(dir.join("t.glb"), glb(&json, &bin)).unwrap();
+    std::fs::write(dir.join("t.glb"), common::glb(&json, &bin)).unwrap();
     assert_ne!(scene(&dir, "t.glb", true).unwrap().triangles, obj.triangles);
 }
 
@@ -252,7 +234,7 @@ fn gltf_transforms_and_materials() {
         &colours,
         None,
     );
-    std::fs::write(dir.join("x.glb"), glb(&json, &bin)).unwrap();
+    std::fs::write(dir.join("x.glb"), common::glb(&json, &bin)).unwrap();
     let s = scene(&dir, "x.glb", false).unwrap();
     let t = &s.triangles[0];
     let want = f[0].map(|k| {
@@ -290,7 +272,7 @@ fn gltf_transforms_and_materials() {
         &[[-0.5, 0.0, 0.0], colours[1]],
         None,
     );
-    std::fs::write(dir.join("neg.glb"), glb(&json, &bin)).unwrap();
+    std::fs::write(dir.join("neg.glb"), common::glb(&json, &bin)).unwrap();
     let e = scene(&dir, "neg.glb", false).unwrap_err().to_string();
     assert!(
         e.contains(
@@ -324,7 +306,7 @@ fn gltf_warnings_and_errors() {
     let dir = common::Scratch::new("gltf-errors");
     let (v, f) = obj_mesh("suzanne");
     let (json, bin) = document(&v, &f, Width::U32, "", &[], None);
-    std::fs::write(dir.join("ok.glb"), glb(&json, &bin)).unwrap();
+    std::fs::write(dir.join("ok.glb"), common::glb(&json, &bin)).unwrap();
     assert!(scene(&dir, "ok.glb", true).unwrap().warnings.is_empty());
     // A LINES primitive beside the triangles.
     let lines = json.replacen(
@@ -332,7 +314,7 @@ fn gltf_warnings_and_errors() {
         r#""primitives":[{"attributes":{"POSITION":0},"mode":1},"#,
         1,
     );
-    std::fs::write(dir.join("l.glb"), glb(&lines, &bin)).unwrap();
+    std::fs::write(dir.join("l.glb"), common::glb(&lines, &bin)).unwrap();
     let s = scene(&dir, "l.glb", true).unwrap();
     assert!(
         s.warnings
@@ -345,7 +327,7 @@ fn gltf_warnings_and_errors() {
     let mut bad = f.clone();
     bad[3][2] = v.len() as u32 + 5;
     let (j, b) = document(&v, &bad, Width::U32, "", &[], None);
-    let e = gltf_error(&dir, "i.glb", &glb(&j, &b));
+    let e = gltf_error(&dir, "i.glb", &common::glb(&j, &b));
     assert!(
         e.contains(&format!(
             "glTF mesh 0 primitive 0: index {} is out of range (the primitive has {} vertices)",
@@ -439,12 +421,12 @@ fn gltf_normals_are_the_objs() {
             &format!(r#""type":"SCALAR"}},{{"bufferView":0,"componentType":5126,"count":{},"type":"VEC3"}}]"#, normals.len()),
         )
         .replace(&format!(r#""byteLength":{nstart}}}]"#), &format!(r#""byteLength":{}}}]"#, bin.len()));
-    std::fs::write(dir.join("n.glb"), glb(&json, &bin)).unwrap();
+    std::fs::write(dir.join("n.glb"), common::glb(&json, &bin)).unwrap();
     let got = smooth("n.glb");
     assert_eq!(got.triangles, want.triangles);
     assert_eq!(got.smooth, want.smooth);
     let (json, bin) = document(&v, &f, Width::U32, "", &[], None);
-    std::fs::write(dir.join("c.glb"), glb(&json, &bin)).unwrap();
+    std::fs::write(dir.join("c.glb"), common::glb(&json, &bin)).unwrap();
     assert_ne!(
         smooth("c.glb").smooth,
         want.smooth,

@@ -284,20 +284,7 @@ fn write_glb(m: &Mesh, png: &[u8]) -> Vec<u8> {
         png.len(),
         bin.len()
     );
-    let mut j = json.into_bytes();
-    while !j.len().is_multiple_of(4) {
-        j.push(b' ');
-    }
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend(((12 + 8 + j.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((j.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(&j);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(&bin);
-    out
+    common::glb(&json, &bin)
 }
 
 /// A scene of the mesh `file`, lit, at 64×48; `material` names a scene material (the

@@ -461,13 +461,7 @@ impl View {
                 .into_iter()
                 .filter(|a| a.is_surface_supported(&surface))
                 .collect();
-        list.sort_by_key(|a| match a.get_info().device_type {
-            wgpu::DeviceType::DiscreteGpu => 0,
-            wgpu::DeviceType::IntegratedGpu => 1,
-            wgpu::DeviceType::VirtualGpu => 2,
-            wgpu::DeviceType::Cpu => 3,
-            wgpu::DeviceType::Other => 4,
-        });
+        glint::gpu::rank_adapters(&mut list);
         let wanted = opts.adapter.as_deref().map(str::to_lowercase);
         let adapter = list
             .into_iter()

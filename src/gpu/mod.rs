@@ -160,6 +160,13 @@ pub fn adapters() -> Vec<wgpu::Adapter> {
         ..wgpu::InstanceDescriptor::new_without_display_handle()
     });
     let mut list = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+    rank_adapters(&mut list);
+    list
+}
+
+/// Sorts adapters best first: discrete GPUs, then integrated, virtual, CPU (lavapipe),
+/// other; the driver's order kept within a kind.
+pub fn rank_adapters(list: &mut [wgpu::Adapter]) {
     list.sort_by_key(|a| match a.get_info().device_type {
         wgpu::DeviceType::DiscreteGpu => 0,
         wgpu::DeviceType::IntegratedGpu => 1,
@@ -167,7 +174,6 @@ pub fn adapters() -> Vec<wgpu::Adapter> {
         wgpu::DeviceType::Cpu => 3,
         wgpu::DeviceType::Other => 4,
     });
-    list
 }
 
 /// How [`Gpu::with_options`] makes its device: settings as values (the command line reads

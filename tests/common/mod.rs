@@ -662,3 +662,23 @@ pub fn same_bits(a: &glint::image::Image, b: &glint::image::Image) -> Result<(),
         )),
     }
 }
+
+/// A `.glb` container of the glTF `json` and its binary chunk `bin` (a multiple of 4
+/// bytes): the header, the JSON chunk padded with spaces, the BIN chunk.
+pub fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
+    let mut j = json.as_bytes().to_vec();
+    while !j.len().is_multiple_of(4) {
+        j.push(b' ');
+    }
+    let total = 12 + 8 + j.len() + 8 + bin.len();
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend((total as u32).to_le_bytes());
+    out.extend((j.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(&j);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
