@@ -3,8 +3,9 @@
 //! module only opens the window (winit), presents the picture through a wgpu surface,
 //! turns the mouse and keys into camera moves and watches the scene's files (notify).
 //!
-//! The picture goes to the screen through a texture of the viewer's own: uploaded from the
-//! tracer's 8-bit frame, then drawn over the surface by a full-screen triangle that copies
+//! The picture goes to the screen through a texture of the viewer's own: written by the
+//! shader on a GPU tracer (the scene kept on the device), uploaded from the CPU tracer's
+//! 8-bit frame otherwise, then drawn over the surface by a full-screen triangle that copies
 //! texels (`textureLoad`, no filtering), so the window shows exactly the bytes `glint
 //! render` writes. `--screenshot` reads that texture back (surfaces need not allow reads).
 
@@ -391,12 +392,14 @@ impl App {
             return Ok(());
         };
         if !self.live.converged() {
-            if let Err(e) = self.live.step(&v.renderer) {
-                let line = format!("{e:#}");
-                eprintln!("error: {line}");
-                self.error = Some(line);
-            } else {
-                v.upload(&self.live)?;
+            match self.live.step_to_texture(&v.renderer, &v.texture) {
+                Ok(true) => {}
+                Ok(false) => v.upload(&self.live)?,
+                Err(e) => {
+                    let line = format!("{e:#}");
+                    eprintln!("error: {line}");
+                    self.error = Some(line);
+                }
             }
         }
         v.present()?;

@@ -44,7 +44,7 @@ pub struct GpuTimings {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, Hash)]
-enum Entry {
+pub(super) enum Entry {
     Render,
     /// `render_rgba8`: the lean frame.
     RenderRgba8,
@@ -54,7 +54,7 @@ enum Entry {
 /// Where `render` writes (`image` in the shader).
 const IMAGE_BINDING: u32 = 5;
 /// Where `render_rgba8` writes (`image_rgba8` in the shader).
-const RGBA8_BINDING: u32 = 14;
+pub(super) const RGBA8_BINDING: u32 = 14;
 
 /// Where a kernel's pipelines get their shader module.
 enum ModuleSource {
@@ -70,7 +70,7 @@ pub struct Kernel {
     flavour: Flavour,
     source: ModuleSource,
     render_layout: wgpu::BindGroupLayout,
-    rgba8_layout: wgpu::BindGroupLayout,
+    pub(super) rgba8_layout: wgpu::BindGroupLayout,
     query_layout: wgpu::BindGroupLayout,
     render_pipeline_layout: wgpu::PipelineLayout,
     rgba8_pipeline_layout: wgpu::PipelineLayout,
@@ -100,7 +100,7 @@ const SCENE_STORAGE: [u32; 6] = [1, 2, 3, 4, 8, 9];
 /// What `shade` alone reads, so bound for `render` only (the `query` entry point stays
 /// within eight storage buffers): the smooth triangles' vertex normals, the textured
 /// triangles' coordinates, the textures' places and their texels.
-const SHADING_BINDINGS: [u32; 4] = [10, 15, 16, 17];
+pub(super) const SHADING_BINDINGS: [u32; 4] = [10, 15, 16, 17];
 /// Every scene binding, in the order of `Kernel::scene_buffers`.
 const SCENE_BINDINGS: [u32; 7] = [0, 1, 2, 3, 4, 8, 9];
 
@@ -121,7 +121,7 @@ fn scene_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
 
 /// A storage buffer holding `data`, or one zeroed element when `data` is empty (WGSL has
 /// no empty bindings). Fails when the device's limits are smaller than the data.
-fn storage_buffer<T: Pod + Default>(
+pub(super) fn storage_buffer<T: Pod + Default>(
     device: &wgpu::Device,
     what: &'static str,
     data: &[T],
@@ -331,7 +331,7 @@ impl Kernel {
     }
 
     /// The pipeline for `spec` and `entry`, compiled now (the time returned) or cached.
-    fn pipeline(
+    pub(super) fn pipeline(
         &self,
         device: &wgpu::Device,
         spec: Specialisation,
@@ -409,7 +409,7 @@ impl Kernel {
     /// The scene's bind-group entries: its buffers at `SCENE_BINDINGS`, then what this
     /// kernel's flavour adds: the acceleration structure (ray queries; `accel` must then be
     /// given), or the BVH nodes and triangles again as dword views (packet traversal).
-    fn scene_bindings<'a>(
+    pub(super) fn scene_bindings<'a>(
         &self,
         scene: &'a [wgpu::Buffer; 7],
         accel: Option<&'a super::rq::Accel>,
@@ -443,7 +443,7 @@ impl Kernel {
 
     /// The driver's acceleration structure over `buf`'s triangles for the ray-query
     /// kernel (built and waited for); `None` for the others.
-    fn accel(
+    pub(super) fn accel(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -455,7 +455,7 @@ impl Kernel {
         super::rq::build(device, queue, &buf.triangles).map(Some)
     }
 
-    fn scene_buffers(
+    pub(super) fn scene_buffers(
         &self,
         device: &wgpu::Device,
         buf: &SceneBuffers,

@@ -4,6 +4,7 @@
 
 pub mod exact;
 mod kernel;
+mod resident;
 pub mod rq;
 pub mod spirv;
 pub mod subgroup;
@@ -13,6 +14,7 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 pub use kernel::{GpuTimings, Kernel, tile_rows};
+pub use resident::Resident;
 
 /// The WGSL source of the kernel: `shaders/common.wgsl`, `prims.wgsl`, `texture.wgsl`,
 /// `trace.wgsl` and `whitted.wgsl`, joined in that order (WGSL needs no declaration before use).

@@ -9,7 +9,9 @@
 //!   position per [`Live::step`], summed in `trace_pixel`'s order, so after N² steps the
 //!   picture is `glint render`'s for that camera in every bit ([`crate::cpu::add_sample_f32`]);
 //!   one sample a pixel is one step of the packet tracer. On a GPU, each step renders the
-//!   whole frame, every sample at once, with the specialised kernel.
+//!   whole frame, every sample at once, with the specialised kernel; a viewer on the same
+//!   device has it traced straight into its texture with the scene kept on the device
+//!   ([`Live::step_to_texture`]).
 //! - **Camera moves** ([`Live::orbit`], [`Live::pan`], [`Live::zoom`], [`Live::fly`]) are
 //!   computed in f64 and rounded to f32 once, so the camera they leave can be written to a
 //!   scene file ([`Live::camera_toml`]) and renders the same there.
@@ -48,6 +50,9 @@ pub struct Live {
     image: Image,
     /// The time of the last step.
     last: Duration,
+    /// The scene on the GPU, for [`Live::step_to_texture`]: made on its first call, and
+    /// again after a new scene or size.
+    resident: Option<crate::gpu::Resident>,
 }
 
 impl Live {
@@ -64,6 +69,7 @@ impl Live {
             done: 0,
             image: Image::new(width, height, [0.0; 4]),
             last: Duration::ZERO,
+            resident: None,
             scene,
             buf,
             spec,
@@ -107,6 +113,7 @@ impl Live {
         let (buf, kept) =
             SceneBuffers::new_reusing(&scene, self.width, self.height, scene.triangle, old);
         self.buf = buf;
+        self.resident = None;
         self.spec = Specialisation::for_scene(&self.buf);
         self.scene = scene;
         self.restart();
@@ -183,6 +190,42 @@ impl Live {
         Ok(())
     }
 
+    /// Refines the picture into `texture`, where the renderer traces on a GPU: the whole
+    /// frame, straight into the texture (`Rgba8Unorm`, the frame's size, `COPY_DST`, on the
+    /// renderer's device), the scene kept on the device between frames so that a moved
+    /// camera uploads only its parameters; then `true` ([`Live::image`] and
+    /// [`Live::rgba8`] are not updated). Elsewhere [`Live::step`], and `false`: the caller
+    /// uploads [`Live::rgba8`].
+    pub fn step_to_texture(
+        &mut self,
+        renderer: &Renderer,
+        texture: &wgpu::Texture,
+    ) -> Result<bool, RenderError> {
+        let gpu = match renderer.tracer() {
+            Tracer::Gpu(g) | Tracer::GpuRq(g) => g,
+            _ => {
+                self.step(renderer)?;
+                return Ok(false);
+            }
+        };
+        if self.converged() {
+            return Ok(true);
+        }
+        let t0 = Instant::now();
+        if self.resident.is_none() {
+            let kernel = match renderer.tracer() {
+                Tracer::GpuRq(_) => gpu.ray_query_kernel()?,
+                _ => gpu.compute_kernel(self.spec)?,
+            };
+            self.resident = Some(kernel.resident(&gpu.device, &gpu.queue, &self.buf, self.spec)?);
+        }
+        let resident = self.resident.as_ref().expect("made above");
+        resident.frame(&gpu.device, &gpu.queue, &self.buf.params, texture)?;
+        self.done = self.total();
+        self.last = t0.elapsed();
+        Ok(true)
+    }
+
     /// The picture as it stands, linear f32 with t (see [`Image`]).
     pub fn image(&self) -> &Image {
         &self.image
@@ -232,6 +275,7 @@ impl Live {
     pub fn resize(&mut self, width: u32, height: u32) {
         self.width = width.max(1);
         self.height = height.max(1);
+        self.resident = None;
         self.buf
             .set_camera(&self.scene.camera, self.width, self.height);
         self.restart();

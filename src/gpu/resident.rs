@@ -1,0 +1,175 @@
+//! A scene kept on the device across frames, for interactive views: its buffers, the
+//! driver's acceleration structure where the kernel uses one, the 8-bit frame buffer and
+//! the bind group are made once ([`Kernel::resident`]); a frame writes the parameters
+//! (the camera), dispatches `render_rgba8` over the whole frame and copies the packed
+//! pixels into a texture on the same device, with no readback. The pixels are
+//! `render_bands_rgba8`'s (the same pipeline and parameters).
+
+use std::time::{Duration, Instant};
+
+use super::GpuError;
+use super::kernel::{Entry, Kernel, RENDER_WORKGROUP, RGBA8_BINDING, SHADING_BINDINGS};
+use super::sync::{check_size, scoped, wait};
+use crate::buffers::{Params, SceneBuffers, Specialisation};
+
+/// A scene uploaded once, drawn into textures as often as asked (see the module's doc).
+pub struct Resident {
+    pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    output: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    width: u32,
+    height: u32,
+    /// The buffers the bind group holds (kept alive with it).
+    _buffers: Vec<wgpu::Buffer>,
+    _accel: Option<super::rq::Accel>,
+}
+
+impl Kernel {
+    /// Uploads `buf` (its frame size fixed from now on) and compiles the pipeline for
+    /// `spec`; fails where the device's limits are smaller than the scene or the frame.
+    pub fn resident(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &SceneBuffers,
+        spec: Specialisation,
+    ) -> Result<Resident, GpuError> {
+        let (width, height) = (buf.params.width, buf.params.height);
+        let (pipeline, _) = self.pipeline(device, spec, Entry::RenderRgba8)?;
+        let bytes = width as u64 * height as u64 * 4;
+        check_size(device, "the frame", bytes)?;
+        let (scene, shading, output) = scoped(device, "upload", || -> Result<_, GpuError> {
+            let scene = self.scene_buffers(device, buf)?;
+            let none = wgpu::BufferUsages::empty();
+            let shading = [
+                super::kernel::storage_buffer(device, "vertex normals", &buf.normals, none)?,
+                super::kernel::storage_buffer(device, "texture coordinates", &buf.uvs, none)?,
+                super::kernel::storage_buffer(device, "textures", &buf.textures, none)?,
+                super::kernel::storage_buffer(device, "texels", &buf.texels, none)?,
+            ];
+            let output = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("frame (rgba8)"),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            Ok((scene, shading, output))
+        })??;
+        let accel = self.accel(device, queue, buf)?;
+        let mut entries = self.scene_bindings(&scene, accel.as_ref());
+        entries.push(wgpu::BindGroupEntry {
+            binding: RGBA8_BINDING,
+            resource: output.as_entire_binding(),
+        });
+        for (binding, b) in SHADING_BINDINGS.into_iter().zip(&shading) {
+            entries.push(wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            });
+        }
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("resident"),
+            layout: &self.rgba8_layout,
+            entries: &entries,
+        });
+        drop(entries);
+        let [params, rest @ ..] = scene;
+        Ok(Resident {
+            pipeline,
+            params,
+            output,
+            bind_group,
+            width,
+            height,
+            _buffers: rest.into_iter().chain(shading).collect(),
+            _accel: accel,
+        })
+    }
+}
+
+impl Resident {
+    /// The frame's size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Traces the frame with `params` (a camera moved by [`SceneBuffers::set_camera`]; the
+    /// size must be this scene's) into `texture` (`Rgba8Unorm`, the frame's size, with
+    /// `COPY_DST`), and waits for it: the time taken.
+    pub fn frame(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        params: &Params,
+        texture: &wgpu::Texture,
+    ) -> Result<Duration, GpuError> {
+        let t0 = Instant::now();
+        let (w, h) = (self.width, self.height);
+        let params = Params {
+            tile_x: 0,
+            tile_y: 0,
+            tile_width: w,
+            tile_height: h,
+            ..*params
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let mut enc = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.dispatch_workgroups(
+                w.div_ceil(RENDER_WORKGROUP),
+                h.div_ceil(RENDER_WORKGROUP),
+                1,
+            );
+        }
+        // Row by row where a row's bytes are not a multiple of the copy alignment (the
+        // frame buffer is packed; a texture copy's rows must be aligned).
+        let row = 4 * w;
+        let extent = |rows: u32| wgpu::Extent3d {
+            width: w,
+            height: rows,
+            depth_or_array_layers: 1,
+        };
+        let to = |y: u32| wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d { x: 0, y, z: 0 },
+            aspect: wgpu::TextureAspect::All,
+        };
+        if row.is_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) {
+            enc.copy_buffer_to_texture(
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.output,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row),
+                        rows_per_image: Some(h),
+                    },
+                },
+                to(0),
+                extent(h),
+            );
+        } else {
+            for y in 0..h {
+                enc.copy_buffer_to_texture(
+                    wgpu::TexelCopyBufferInfo {
+                        buffer: &self.output,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: y as u64 * row as u64,
+                            bytes_per_row: None,
+                            rows_per_image: None,
+                        },
+                    },
+                    to(y),
+                    extent(1),
+                );
+            }
+        }
+        scoped(device, "trace", || queue.submit([enc.finish()]))?;
+        wait(device, "trace")?;
+        Ok(t0.elapsed())
+    }
+}
