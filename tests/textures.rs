@@ -431,6 +431,22 @@ fn untextured_scenes_are_untouched() {
     }
 }
 
+/// The CRC-32 of PNG chunks (ISO 3309), bit by bit.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
 fn error(dir: &Path, material: &str) -> String {
     match quad(dir, material) {
         Ok(_) => panic!("{material}: no error"),
@@ -439,8 +455,8 @@ fn error(dir: &Path, material: &str) -> String {
 }
 
 /// Errors name the file, the line and the key (and the texture): a missing texture, a
-/// file that is not an image, coordinates that are not finite, an MTL's missing
-/// `map_Kd`. Warnings: coordinates without a texture, a texture without coordinates. The
+/// file that is not an image, one whose header claims a size past the limit, coordinates
+/// that are not finite, an MTL's missing `map_Kd`. Warnings: coordinates without a texture, a texture without coordinates. The
 /// twin: the good quad loads without a warning.
 #[test]
 fn bad_textures_and_coordinates_are_named() {
@@ -461,6 +477,22 @@ fn bad_textures_and_coordinates_are_named() {
     let e = error(&dir, "map_ka = \"junk.png\"");
     assert!(
         e.contains("materials.m.map_ka") && e.contains("junk.png: cannot decode"),
+        "{e}"
+    );
+    // A PNG whose header claims 100000×100000 texels (30 GB decoded): refused from the
+    // header, before any allocation.
+    let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(100_000u32.to_be_bytes());
+    ihdr.extend(100_000u32.to_be_bytes());
+    ihdr.extend([8, 2, 0, 0, 0]);
+    png.extend(13u32.to_be_bytes());
+    png.extend(&ihdr);
+    png.extend(crc32(&ihdr).to_be_bytes());
+    std::fs::write(dir.join("huge.png"), &png).unwrap();
+    let e = error(&dir, "map_kd = \"huge.png\"");
+    assert!(
+        e.contains("materials.m.map_kd") && e.contains("huge.png: cannot decode"),
         "{e}"
     );
     // Coordinates that are not finite (TOML's nan), in the good quad.

@@ -427,6 +427,30 @@ fn an_orbit_leaves_a_camera_that_renders_the_same() {
     assert!(v.quit().success());
 }
 
+/// With a display but no Vulkan adapter (the loader pointed at no driver): one line, exit
+/// status 1, no panic.
+#[test]
+fn no_adapter_is_a_one_line_error() {
+    let x = Xvfb::start();
+    let s = glint_command()
+        .env("DISPLAY", &x.display)
+        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+        .args(["view"])
+        .arg(scene("bb8"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&s.stderr);
+    assert_eq!(s.status.code(), Some(1), "{err}");
+    assert!(err.contains("no Vulkan adapter"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(
+        err.lines().filter(|l| l.starts_with("error")).count(),
+        1,
+        "{err}"
+    );
+}
+
 /// Without a display: one line, exit status 1, no panic.
 #[test]
 fn no_display_is_a_one_line_error() {

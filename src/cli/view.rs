@@ -458,7 +458,11 @@ impl View {
         });
         let surface = instance
             .create_surface(window.clone())
-            .map_err(|e| anyhow!("cannot present to the window: {e}"))?;
+            .map_err(|e| {
+                anyhow!(
+                    "cannot present to the window: no Vulkan adapter can ({e}; apt-get install mesa-vulkan-drivers libvulkan1)"
+                )
+            })?;
         let mut list: Vec<wgpu::Adapter> =
             pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN))
                 .into_iter()
