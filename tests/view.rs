@@ -9,43 +9,50 @@ mod common;
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc::{Receiver, channel};
+use std::process::{Child, ChildStdout, Command, Stdio};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
 use std::time::{Duration, Instant};
 
 use common::{Scratch, glint_command};
 
-/// An X server of the test's own on a free display number; killed when dropped.
+/// An X server of the test's own on a display number the server picks itself
+/// (`-displayfd`: tests running at once never share or race for one); killed when dropped.
 struct Xvfb {
     child: Child,
     display: String,
+    /// Xvfb's stdout, held open so that nothing it writes later meets a closed pipe.
+    _stdout: BufReader<ChildStdout>,
 }
 
 impl Xvfb {
     fn start() -> Xvfb {
-        for n in 0..50 {
-            let k = 100 + (std::process::id() as usize + n * 7) % 400;
-            if Path::new(&format!("/tmp/.X11-unix/X{k}")).exists()
-                || Path::new(&format!("/tmp/.X{k}-lock")).exists()
-            {
-                continue;
-            }
-            let display = format!(":{k}");
-            let child = Command::new("Xvfb")
-                .args([&display, "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-                .expect("Xvfb: install the xvfb package (.ci/test.sh does)");
-            let socket = format!("/tmp/.X11-unix/X{k}");
-            let t0 = Instant::now();
-            while !Path::new(&socket).exists() && t0.elapsed() < Duration::from_secs(10) {
-                std::thread::sleep(Duration::from_millis(20));
-            }
-            assert!(Path::new(&socket).exists(), "Xvfb {display} did not start");
-            return Xvfb { child, display };
+        let mut child = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1280x1024x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("Xvfb: install the xvfb package (.ci/test.sh does)");
+        // Xvfb writes the display number once it accepts connections.
+        let mut stdout = BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        stdout.read_line(&mut line).unwrap();
+        let n: u32 = line
+            .trim()
+            .parse()
+            .unwrap_or_else(|_| panic!("Xvfb -displayfd printed {line:?}"));
+        Xvfb {
+            child,
+            display: format!(":{n}"),
+            _stdout: stdout,
         }
-        panic!("no free X display number");
     }
 }
 
@@ -229,16 +236,22 @@ impl Viewer {
         v
     }
 
+    /// The first line from `rx` containing `what`; a panic listing the lines seen if the
+    /// viewer closes the stream or none comes within 60 s.
     fn wait(rx: &Receiver<String>, what: &str) -> String {
         let t0 = Instant::now();
+        let mut seen = Vec::new();
         while t0.elapsed() < Duration::from_secs(60) {
-            if let Ok(l) = rx.recv_timeout(Duration::from_millis(100))
-                && l.contains(what)
-            {
-                return l;
+            match rx.recv_timeout(Duration::from_millis(100)) {
+                Ok(l) if l.contains(what) => return l,
+                Ok(l) => seen.push(l),
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => {
+                    panic!("the viewer closed its output before {what:?}; it printed {seen:#?}")
+                }
             }
         }
-        panic!("no line with {what:?} within 60 s");
+        panic!("no line with {what:?} within 60 s; the viewer printed {seen:#?}");
     }
 
     fn wait_err(&mut self, what: &str) -> String {
