@@ -5,6 +5,8 @@
 # 2. fmt, clippy -D warnings, then the whole suite on the system's lavapipe (with Xvfb and
 #    xdotool installed first for `glint view`'s window tests).
 # 3. Pass 4: the Python package, `pip install ./python[test]` into a fresh venv, and pytest.
+#    Pass 5: the browser page: `bash web/build.sh` (wasm), Debian's Chromium installed, and
+#    tests/browser.rs's ignored tests run in headless Chromium with WebGPU (SwiftShader).
 # 4. Every test binary with GPU tests again on Mesa 25.0's lavapipe and on Mesa 26.1's,
 #    which `.ci/lavapipe.sh` provides without touching the system (Debian 12: from
 #    bookworm-backports and from Debian 13's trixie-backports, unpacked privately; 26.1's
@@ -109,6 +111,31 @@ GLINT_BIN="$PWD/target/debug/glint" .cache/pyenv/bin/python -m pytest python/tes
     tee /tmp/glint-pass4.log
 [ "${PIPESTATUS[0]}" = 0 ] || exit 1
 summary+=("pass 4 (Python $(.cache/pyenv/bin/python -c 'import sys; print(sys.version.split()[0])')): $(grep -Eo '[0-9]+ passed' /tmp/glint-pass4.log | tail -1) in $((SECONDS - start)) s")
+
+# ---- pass 5: the browser page in headless Chromium with WebGPU --------------------------
+# web/build.sh provides its wasm toolchain itself (rustup's target, or Debian's, privately);
+# the tests drive Chromium through the DevTools protocol with Node's built-in WebSocket.
+start=$SECONDS
+if ! command -v chromium >/dev/null; then
+    echo "glint: installing chromium for the browser page's tests"
+    export DEBIAN_FRONTEND=noninteractive
+    $([ "$(id -u)" -eq 0 ] || echo sudo) apt-get update -qq
+    $([ "$(id -u)" -eq 0 ] || echo sudo) apt-get install -y -qq chromium >/dev/null
+fi
+command -v node >/dev/null || {
+    echo "glint: pass 5 needs Node.js 20 or newer (node) for the DevTools driver" >&2
+    exit 1
+}
+echo "=== pass 5: the browser page ($(chromium --version 2>/dev/null), node $(node --version)) ==="
+bash web/build.sh
+# The page's crate is empty natively; lint it for its own target where the system's
+# toolchain has one (rustup's), as web/build.sh found or added it.
+if compgen -G "$(rustc --print target-libdir --target wasm32-unknown-unknown 2>/dev/null)/libstd-*.rlib" >/dev/null; then
+    CARGO_TARGET_DIR=target/wasm cargo clippy --locked -p glint-web --target wasm32-unknown-unknown -- -D warnings
+fi
+cargo test --locked --test browser -- --ignored 2>&1 | tee /tmp/glint-pass5.log
+[ "${PIPESTATUS[0]}" = 0 ] || exit 1
+summary+=("pass 5 (browser: $(chromium --version 2>/dev/null)): $(grep -c '^test .* ok$' /tmp/glint-pass5.log) tests ok in $((SECONDS - start)) s")
 
 # ---- passes 2 and 3: the GPU test binaries on Mesa 25.0 and on Mesa 26.1 ---------------
 gpu_bins=()

@@ -63,7 +63,9 @@ const FLAT: u32 = 0u; // Triangle::normals of a flat triangle
 const NO_UVS: u32 = 0u; // Triangle::uvs of an untextured triangle
 const NO_TEXTURE: u32 = 0xffffffffu; // TriangleUvs::map_kd / map_ka: no map
 const TRIANGLE_BIT: u32 = 0x80000000u;
-const INFINITY: f32 = 3.40282347e38; // f32::MAX: a t that every real hit beats
+// f32::MAX: a t that every real hit beats. In hexadecimal: the decimal 3.40282347e38 lies
+// above f32::MAX, and Tint (Chrome) refuses a literal that is not representable.
+const INFINITY: f32 = 0x1.fffffep+127f;
 const SHADOW_EPSILON: f32 = 1.1920929e-7; // see buffers::SHADOW_EPSILON
 const SPLITTER: f32 = 4097.0; // 2^12 + 1, Veltkamp's split for f32
 const BVH_STACK: u32 = 48u; // bvh::MAX_DEPTH: the builder never makes a deeper tree
@@ -202,10 +204,10 @@ struct HitOut {
 @group(0) @binding(10) var<storage, read> normals: array<VertexNormals>;
 /// The textured triangles' texture coordinates (entry 0 unused): read by `shade` only.
 @group(0) @binding(15) var<storage, read> uvs: array<TriangleUvs>;
-/// Each texture's place in `texels`.
-@group(0) @binding(16) var<storage, read> textures: array<Texture>;
-/// Every texture's linear RGB texels, three f32 each, rows bottom to top.
-@group(0) @binding(17) var<storage, read> texels: array<f32>;
+/// The textures, in words: each texture's place (a `Texture`, four words), then every
+/// texture's linear RGB texels as f32 bit patterns, three each, rows bottom to top. One
+/// buffer, so that `render` binds ten storage buffers (WebGPU's adapters offer 8 to 10).
+@group(0) @binding(17) var<storage, read> texels: array<u32>;
 /// The lean frame (`render_rgba8`): each pixel's colour as `pack_rgba8` gives it.
 @group(0) @binding(14) var<storage, read_write> image_rgba8: array<u32>;
 

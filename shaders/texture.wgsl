@@ -30,14 +30,20 @@ fn texel(tex: Texture, x: i32, y: i32) -> vec3<f32> {
     let xw = select(select(x, x - w, x >= w), x + w, x < 0);
     let yw = select(select(y, y - h, y >= h), y + h, y < 0);
     let k = tex.offset + 3u * (u32(yw) * tex.width + u32(xw));
-    return vec3<f32>(texels[k], texels[k + 1u], texels[k + 2u]);
+    return vec3<f32>(bitcast<f32>(texels[k]), bitcast<f32>(texels[k + 1u]), bitcast<f32>(texels[k + 2u]));
+}
+
+/// Texture `id`'s place: the four words at 4 × `id` in `texels`.
+fn texture_place(id: u32) -> Texture {
+    let k = 4u * id;
+    return Texture(texels[k], texels[k + 1u], texels[k + 2u], 0u);
 }
 
 /// The colour of texture `id` at `uv`, v up: bilinear between the four texel centres
 /// around it (texel (x, y) is centred at ((x + 0.5) / width, (y + 0.5) / height)), wrapping
 /// around the edges. At a texel centre it is that texel's colour exactly.
 fn texture_colour(id: u32, uv: vec2<f32>) -> vec3<f32> {
-    let tex = textures[id];
+    let tex = texture_place(id);
     let x = wrap01(uv.x) * f32(tex.width) - 0.5;
     let y = wrap01(uv.y) * f32(tex.height) - 0.5;
     let xf = floor(x);

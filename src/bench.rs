@@ -1,7 +1,8 @@
 //! `glint bench`: speed against error for each scene × tracer × triangle algorithm, and
 //! the specialised pipeline beside the general one. Release builds only mean anything.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 use serde::Serialize;
 

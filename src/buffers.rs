@@ -32,12 +32,15 @@ pub struct SceneBuffers {
     pub normals: Vec<VertexNormals>,
     /// Texture coordinates of the textured triangles, entry 0 unused (`Triangle::uvs` =
     /// `NO_UVS` names no entry); empty when no triangle is textured, and then the
-    /// pipeline's `TEXTURES` is off and the shader never reads it, `textures` or `texels`.
+    /// pipeline's `TEXTURES` is off and the shader never reads it or `texels`.
     pub uvs: Vec<TriangleUvs>,
-    /// Each texture's place in `texels`, in the scene's order of textures.
-    pub textures: Vec<Texture>,
-    /// Every texture's linear RGB texels, three f32 each, rows bottom (v = 0) to top.
-    pub texels: Vec<f32>,
+    /// The textures, in 32-bit words: first each texture's place, a [`Texture`] (four
+    /// words) in the scene's order of textures, then every texture's linear RGB texels as
+    /// f32 bit patterns, three words each, rows bottom (v = 0) to top. One buffer, not a
+    /// table and a texel array, so that `render` binds ten storage buffers, within what
+    /// WebGPU adapters offer a shader stage (`maxStorageBuffersPerShaderStage`: 10 on
+    /// Chrome's SwiftShader and most desktop adapters, 8 by default).
+    pub texels: Vec<u32>,
     /// [`SceneBuffers::leaf_triangles`], made on its first call.
     leaf_triangles: std::sync::OnceLock<Vec<Triangle>>,
     /// The triangle algorithm (`TRIANGLE_*`).
@@ -124,7 +127,7 @@ impl SceneBuffers {
         algo: TriangleAlgorithm,
         old: Option<SceneBuffers>,
     ) -> (Self, bool) {
-        let t_flat = std::time::Instant::now();
+        let t_flat = web_time::Instant::now();
         let uvs = triangle_uvs(&mut triangles, &scene.uvs, &scene.materials);
         let cam = &scene.camera;
         let params = Params {
@@ -166,13 +169,12 @@ impl SceneBuffers {
             })
             .collect();
         let lights: Vec<Light> = scene.lights.iter().map(light).collect();
-        let (textures, texels) = texture_buffers(&scene.textures);
+        let texels = texture_buffers(&scene.textures);
         crate::stages::record("flatten", t_flat.elapsed());
         if let Some(old) = old.filter(|o| o.spheres == spheres && o.triangles == triangles) {
             let buf = SceneBuffers {
                 normals,
                 uvs,
-                textures,
                 texels,
                 ..SceneBuffers::with_bvh(
                     params,
@@ -190,7 +192,6 @@ impl SceneBuffers {
         let buf = SceneBuffers {
             normals,
             uvs,
-            textures,
             texels,
             ..SceneBuffers::assemble_cached(
                 scene.cache.as_deref(),
@@ -316,7 +317,6 @@ impl SceneBuffers {
             prim_ids,
             normals: Vec::new(),
             uvs: Vec::new(),
-            textures: Vec::new(),
             texels: Vec::new(),
             leaf_triangles: std::sync::OnceLock::new(),
             triangle_algo: algo.code(),
@@ -566,22 +566,31 @@ fn triangle_uvs(
     out
 }
 
-/// The scene's textures as the shader reads them: each one's place, and all their texels
-/// in one list.
-fn texture_buffers(textures: &[crate::scene::Texture]) -> (Vec<Texture>, Vec<f32>) {
-    let mut places = Vec::with_capacity(textures.len());
-    let mut texels = Vec::with_capacity(textures.iter().map(|t| t.texels.len()).sum());
+/// The scene's textures as the shader reads them ([`SceneBuffers::texels`]): each one's
+/// place, then all their texels, in one list of words.
+fn texture_buffers(textures: &[crate::scene::Texture]) -> Vec<u32> {
+    let table = TEXTURE_WORDS * textures.len();
+    let mut words =
+        Vec::with_capacity(table + textures.iter().map(|t| t.texels.len()).sum::<usize>());
+    let mut offset = table;
     for t in textures {
-        places.push(Texture {
-            offset: texels.len() as u32,
+        let place = Texture {
+            offset: offset as u32,
             width: t.width,
             height: t.height,
             _pad0: 0,
-        });
-        texels.extend_from_slice(&t.texels);
+        };
+        words.extend_from_slice(bytemuck::cast_slice(std::slice::from_ref(&place)));
+        offset += t.texels.len();
     }
-    (places, texels)
+    for t in textures {
+        words.extend(t.texels.iter().map(|x| x.to_bits()));
+    }
+    words
 }
+
+/// Words of one [`Texture`] in [`SceneBuffers::texels`].
+pub const TEXTURE_WORDS: usize = std::mem::size_of::<Texture>() / 4;
 
 /// The scene's triangles as the shader's, and the vertex normals they name (entry 0 stands
 /// for "flat"; empty when no mesh is smooth).

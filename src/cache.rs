@@ -340,16 +340,21 @@ impl Cache {
     /// missing, or it is damaged (then it is deleted, and a warning recorded).
     pub fn load(&self, kind: &'static str, key: &Key) -> Option<Vec<Vec<u32>>> {
         let path = self.settings.dir.join(key.file_name());
-        let mut file = std::fs::File::open(&path).ok()?;
-        match read_entry(&mut file, key) {
-            Ok(sections) => {
+        let read = {
+            let mut file = std::fs::File::open(&path).ok()?;
+            let read = read_entry(&mut file, key);
+            if read.is_ok() {
                 // Touched, so the size limit drops the entries least recently used.
                 let _ = file.set_modified(std::time::SystemTime::now());
+            }
+            read
+        }; // the file closed, so that a damaged one can be deleted (on Windows too)
+        match read {
+            Ok(sections) => {
                 self.event(Event::Hit { kind });
                 Some(sections)
             }
             Err(why) => {
-                drop(file);
                 let _ = std::fs::remove_file(&path);
                 self.event(Event::Damaged { kind, path, why });
                 None

@@ -3,7 +3,8 @@
 //! `glint render -v` prints them. Recording is a mutex push per stage, not per primitive.
 
 use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 static STAGES: Mutex<Vec<(&'static str, Duration)>> = Mutex::new(Vec::new());
 

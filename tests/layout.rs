@@ -259,3 +259,44 @@ fn variant_modules_parse_and_validate() {
         }
     }
 }
+
+/// The storage buffers each entry point uses, by naga's analysis of the shader.
+fn storage_buffers_used(entry: &str) -> u32 {
+    let module = module();
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{}", e.emit_to_string(SHADER_SOURCE)));
+    let index = module
+        .entry_points
+        .iter()
+        .position(|e| e.name == entry)
+        .unwrap_or_else(|| panic!("no entry point {entry}"));
+    let uses = info.get_entry_point(index);
+    module
+        .global_variables
+        .iter()
+        .filter(|(h, g)| {
+            matches!(g.space, naga::AddressSpace::Storage { .. }) && !uses[*h].is_empty()
+        })
+        .count() as u32
+}
+
+/// `render` and `render_rgba8` bind `RENDER_STORAGE_BUFFERS` storage buffers, the number a
+/// device must offer per stage (WebGPU adapters offer 8 to 10); the twin: `query` binds
+/// fewer, so the count tells entry points apart.
+#[test]
+fn render_binds_the_storage_buffers_it_declares() {
+    use glint::gpu::RENDER_STORAGE_BUFFERS;
+    assert_eq!(RENDER_STORAGE_BUFFERS, 10);
+    for entry in ["render", "render_rgba8"] {
+        assert_eq!(
+            storage_buffers_used(entry),
+            RENDER_STORAGE_BUFFERS,
+            "{entry}"
+        );
+    }
+    assert!(storage_buffers_used("query") < RENDER_STORAGE_BUFFERS);
+}

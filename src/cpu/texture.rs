@@ -53,16 +53,29 @@ pub fn texel<R: Real>(g: &Globals<R>, tex: &Texture, x: i32, y: i32) -> V3<R> {
     let k = (tex.offset + 3 * (yw as u32 * tex.width + xw as u32)) as usize;
     let t = &g.buf.texels;
     V3::new(
-        R::from_f32(t[k]),
-        R::from_f32(t[k + 1]),
-        R::from_f32(t[k + 2]),
+        R::from_f32(f32::from_bits(t[k])),
+        R::from_f32(f32::from_bits(t[k + 1])),
+        R::from_f32(f32::from_bits(t[k + 2])),
     )
+}
+
+/// WGSL `texture_place`: texture `id`'s place, the four words at 4 × `id` in `texels`.
+#[inline]
+pub fn texture_place<R: Real>(g: &Globals<R>, id: u32) -> Texture {
+    let k = 4 * id as usize;
+    let t = &g.buf.texels;
+    Texture {
+        offset: t[k],
+        width: t[k + 1],
+        height: t[k + 2],
+        _pad0: 0,
+    }
 }
 
 /// WGSL `texture_colour`: texture `id` at `uv` (v up), bilinear between the four texel
 /// centres around it, wrapping around the edges.
 pub fn texture_colour<R: Real>(g: &Globals<R>, id: u32, uv: [R; 2]) -> V3<R> {
-    let tex = &g.buf.textures[id as usize];
+    let tex = &texture_place(g, id);
     let half = R::ONE / (R::ONE + R::ONE);
     let x = wrap01(uv[0]) * R::from_u32(tex.width) - half;
     let y = wrap01(uv[1]) * R::from_u32(tex.height) - half;

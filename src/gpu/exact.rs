@@ -75,6 +75,13 @@ impl SpirvTarget {
     }
 }
 
+/// In the browser there is no SPIR-V: WebGPU takes WGSL only.
+#[cfg(target_arch = "wasm32")]
+fn device_facts(_device: &wgpu::Device) -> Option<SpirvTarget> {
+    None
+}
+
+#[cfg(not(target_arch = "wasm32"))]
 fn device_facts(device: &wgpu::Device) -> Option<SpirvTarget> {
     // SAFETY: the hal device is only read (its instance, physical device and the
     // extensions wgpu enabled), while the wgpu device it belongs to is borrowed.
@@ -107,12 +114,13 @@ fn device_facts(device: &wgpu::Device) -> Option<SpirvTarget> {
 /// wgpu would write only by its decorations. Capabilities are left for naga to declare
 /// as used.
 fn spv_options(facts: &SpirvTarget) -> naga::back::spv::Options<'static> {
-    use ash::vk;
     use naga::proc::BoundsCheckPolicy as P;
+    // `VK_MAKE_API_VERSION(0, 1, minor, 0)`, as ash's `API_VERSION_1_x` constants.
+    let vk_1 = |minor: u32| (1 << 22) | (minor << 12);
     let lang_version = match facts.api_version {
-        v if v >= vk::API_VERSION_1_3 => (1, 6),
-        v if v >= vk::API_VERSION_1_2 => (1, 5),
-        v if v >= vk::API_VERSION_1_1 => (1, 3),
+        v if v >= vk_1(3) => (1, 6),
+        v if v >= vk_1(2) => (1, 5),
+        v if v >= vk_1(1) => (1, 3),
         _ => (1, 0),
     };
     naga::back::spv::Options {

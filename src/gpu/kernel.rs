@@ -3,7 +3,8 @@
 
 use std::collections::HashMap;
 use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 use bytemuck::Pod;
 use wgpu::util::DeviceExt;
@@ -99,8 +100,12 @@ fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
 const SCENE_STORAGE: [u32; 6] = [1, 2, 3, 4, 8, 9];
 /// What `shade` alone reads, so bound for `render` only (the `query` entry point stays
 /// within eight storage buffers): the smooth triangles' vertex normals, the textured
-/// triangles' coordinates, the textures' places and their texels.
-pub(super) const SHADING_BINDINGS: [u32; 4] = [10, 15, 16, 17];
+/// triangles' coordinates, the textures (places and texels, one buffer).
+pub(super) const SHADING_BINDINGS: [u32; 3] = [10, 15, 17];
+/// The storage buffers `render` and `render_rgba8` bind: the scene's, the shading's and
+/// the output. A device must offer that many per shader stage
+/// (`maxStorageBuffersPerShaderStage`; WebGPU's default is 8, most adapters offer 10).
+pub const RENDER_STORAGE_BUFFERS: u32 = (SCENE_STORAGE.len() + SHADING_BINDINGS.len() + 1) as u32;
 /// Every scene binding, in the order of `Kernel::scene_buffers`.
 const SCENE_BINDINGS: [u32; 7] = [0, 1, 2, 3, 4, 8, 9];
 
@@ -625,7 +630,6 @@ impl Kernel {
                 let shading = [
                     storage_buffer(device, "vertex normals", &buf.normals, none)?,
                     storage_buffer(device, "texture coordinates", &buf.uvs, none)?,
-                    storage_buffer(device, "textures", &buf.textures, none)?,
                     storage_buffer(device, "texels", &buf.texels, none)?,
                 ];
                 let output = device.create_buffer(&wgpu::BufferDescriptor {

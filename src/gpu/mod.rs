@@ -11,9 +11,10 @@ pub mod subgroup;
 mod sync;
 
 use std::sync::OnceLock;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
-pub use kernel::{GpuTimings, Kernel, tile_rows};
+pub use kernel::{GpuTimings, Kernel, RENDER_STORAGE_BUFFERS, tile_rows};
 pub use resident::Resident;
 
 /// The WGSL source of the kernel: `shaders/common.wgsl`, `prims.wgsl`, `texture.wgsl`,

@@ -5,7 +5,8 @@
 //! pixels into a texture on the same device, with no readback. The pixels are
 //! `render_bands_rgba8`'s (the same pipeline and parameters).
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 use super::GpuError;
 use super::kernel::{Entry, Kernel, RENDER_WORKGROUP, RGBA8_BINDING, SHADING_BINDINGS};
@@ -45,7 +46,6 @@ impl Kernel {
             let shading = [
                 super::kernel::storage_buffer(device, "vertex normals", &buf.normals, none)?,
                 super::kernel::storage_buffer(device, "texture coordinates", &buf.uvs, none)?,
-                super::kernel::storage_buffer(device, "textures", &buf.textures, none)?,
                 super::kernel::storage_buffer(device, "texels", &buf.texels, none)?,
             ];
             let output = device.create_buffer(&wgpu::BufferDescriptor {
@@ -106,25 +106,7 @@ impl Resident {
     ) -> Result<Duration, GpuError> {
         let t0 = Instant::now();
         let (w, h) = (self.width, self.height);
-        let params = Params {
-            tile_x: 0,
-            tile_y: 0,
-            tile_width: w,
-            tile_height: h,
-            ..*params
-        };
-        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let mut enc = device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.bind_group, &[]);
-            pass.dispatch_workgroups(
-                w.div_ceil(RENDER_WORKGROUP),
-                h.div_ceil(RENDER_WORKGROUP),
-                1,
-            );
-        }
+        let mut enc = self.trace(device, queue, params);
         // Row by row where a row's bytes are not a multiple of the copy alignment (the
         // frame buffer is packed; a texture copy's rows must be aligned).
         let row = 4 * w;
@@ -171,5 +153,55 @@ impl Resident {
         scoped(device, "trace", || queue.submit([enc.finish()]))?;
         wait(device, "trace")?;
         Ok(t0.elapsed())
+    }
+
+    /// Traces the frame with `params` as [`Resident::frame`] does and copies its packed
+    /// pixels (rows top to bottom, red in each word's lowest byte) into `staging`
+    /// (`MAP_READ | COPY_DST`, at least `4 × width × height` bytes), without waiting: for
+    /// a caller that maps the buffer itself, as a browser must (a WebGPU map completes
+    /// only once control is back in the page's event loop).
+    pub fn frame_to_buffer(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        params: &Params,
+        staging: &wgpu::Buffer,
+    ) -> Result<(), GpuError> {
+        let bytes = 4 * self.width as u64 * self.height as u64;
+        let mut enc = self.trace(device, queue, params);
+        enc.copy_buffer_to_buffer(&self.output, 0, staging, 0, bytes);
+        scoped(device, "trace", || queue.submit([enc.finish()]))?;
+        Ok(())
+    }
+
+    /// Writes `params` (as a whole-frame tile) and records the dispatch of `render_rgba8`
+    /// into the frame buffer.
+    fn trace(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        params: &Params,
+    ) -> wgpu::CommandEncoder {
+        let (w, h) = (self.width, self.height);
+        let params = Params {
+            tile_x: 0,
+            tile_y: 0,
+            tile_width: w,
+            tile_height: h,
+            ..*params
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let mut enc = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.dispatch_workgroups(
+                w.div_ceil(RENDER_WORKGROUP),
+                h.div_ceil(RENDER_WORKGROUP),
+                1,
+            );
+        }
+        enc
     }
 }

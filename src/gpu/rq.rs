@@ -2,7 +2,7 @@
 //! with the driver answering for the triangles, `shaders/trace_rq.wgsl`) and the
 //! acceleration structure over a scene's triangles.
 
-use std::time::Instant;
+use web_time::Instant;
 
 use super::GpuError;
 use crate::buffers::Triangle;

@@ -27,6 +27,7 @@ pub(crate) fn wait(device: &wgpu::Device, during: &'static str) -> Result<(), Gp
 }
 
 /// Runs `f` inside error scopes for validation and out-of-memory errors.
+#[cfg(not(target_arch = "wasm32"))]
 pub(crate) fn scoped<T>(
     device: &wgpu::Device,
     during: &'static str,
@@ -44,6 +45,19 @@ pub(crate) fn scoped<T>(
             message: e.to_string(),
         }),
     }
+}
+
+/// In the browser a scope's error arrives only after control returns to the page's event
+/// loop, so nothing can wait for it here: `f` runs as it is, and a WebGPU error reaches
+/// the device's uncaptured-error handler (the page's console, and the embedder's
+/// `on_uncaptured_error`) instead of this result.
+#[cfg(target_arch = "wasm32")]
+pub(crate) fn scoped<T>(
+    _device: &wgpu::Device,
+    _during: &'static str,
+    f: impl FnOnce() -> T,
+) -> Result<T, GpuError> {
+    Ok(f())
 }
 
 pub(crate) fn check_size(

@@ -4,7 +4,8 @@
 use std::fmt;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 use super::output::{Output, Sink};
 use super::renderer::{RenderError, RenderOptions, Renderer, Tracer, TracerKind};

@@ -16,7 +16,8 @@
 //!   computed in f64 and rounded to f32 once, so the camera they leave can be written to a
 //!   scene file ([`Live::camera_toml`]) and renders the same there.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 use glam::DVec3;
 

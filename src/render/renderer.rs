@@ -236,7 +236,7 @@ impl Renderer {
                 (Tracer::GpuRq(Box::new(g)), None)
             }
             Backend::Auto => {
-                let t0 = std::time::Instant::now();
+                let t0 = web_time::Instant::now();
                 let list = crate::gpu::adapters();
                 let infos: Vec<wgpu::AdapterInfo> = list.iter().map(|a| a.get_info()).collect();
                 if infos.is_empty() {

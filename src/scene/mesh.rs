@@ -366,7 +366,7 @@ pub(super) fn load(
         return entry.add_gltf(g, &xf, cached, &mut out);
     }
     let (mut bytes, early) = entry.unpack(raw)?;
-    let t_check = std::time::Instant::now();
+    let t_check = web_time::Instant::now();
     // A UTF-8 byte-order mark is allowed (some exporters write one); tobj would read the
     // first line as an unknown keyword.
     if bytes.starts_with(b"\xEF\xBB\xBF") {
@@ -703,13 +703,13 @@ impl<'e> Entry<'e> {
         bytes: &[u8],
         text: &str,
         xf: &Transform,
-        t_check: std::time::Instant,
+        t_check: web_time::Instant,
         out: &mut Out<'_>,
     ) -> Result<(), SceneError> {
         let checked =
             super::obj::check(text, self.normals).map_err(|e| self.fail(MeshError::Obj(e)))?;
         crate::stages::record("OBJ check", t_check.elapsed());
-        let t_parse = std::time::Instant::now();
+        let t_parse = web_time::Instant::now();
         let (models, mtl) = self.tobj_parse(bytes)?;
         let named = match &self.m.material {
             Some(name) => Some(self.material(name, out.materials)?),
@@ -1150,7 +1150,7 @@ fn inflate(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> 
     if path.extension().is_none_or(|e| e != "gz") {
         return Ok(raw);
     }
-    let _gunzip = Gunzip(std::time::Instant::now());
+    let _gunzip = Gunzip(web_time::Instant::now());
     use std::io::Read;
     let mut out = Vec::new();
     flate2::read::GzDecoder::new(&raw[..])
@@ -1164,7 +1164,7 @@ fn inflate(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> 
 }
 
 fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> {
-    let _gunzip = Gunzip(std::time::Instant::now());
+    let _gunzip = Gunzip(web_time::Instant::now());
     if path.extension().is_some_and(|e| e == "gz") {
         use std::io::Read;
         let mut out = Vec::new();
@@ -1231,7 +1231,7 @@ fn gunzip_parse(
 ) -> Option<(Vec<u8>, ObjParse)> {
     use std::io::Read;
     use std::sync::Mutex;
-    let t0 = std::time::Instant::now();
+    let t0 = web_time::Instant::now();
     let isize_bytes: [u8; 4] = raw.get(raw.len().checked_sub(4)?..)?.try_into().ok()?;
     let size = u32::from_le_bytes(isize_bytes) as usize;
     if size == 0 || size as u64 > limit {
@@ -1250,7 +1250,7 @@ fn gunzip_parse(
         // The pieces handed out, to number the line of a junk error.
         let mut handed: Vec<&[u8]> = Vec::new();
         for index in 0.. {
-            let t = std::time::Instant::now();
+            let t = web_time::Instant::now();
             let mut want = (filled + piece).min(rest.len());
             let mut cut = None;
             // Bytes of `rest` already searched for a line end (each byte once: a long line
@@ -1340,7 +1340,7 @@ fn gunzip_parse(
 }
 
 /// Records the gunzip stage when dropped (at every return of `gunzip`).
-struct Gunzip(std::time::Instant);
+struct Gunzip(web_time::Instant);
 
 impl Drop for Gunzip {
     fn drop(&mut self) {

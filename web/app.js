@@ -1,0 +1,196 @@
+// The page: asks glint-web (the wasm module) and draws what it answers. The work is the
+// library's; this file fetches files, shows images, errors and the verdict.
+//
+// Contract for tests and embedders (README, "glint in the browser"):
+//   await window.glintReady;
+//   await window.glint.render(tomlText, { backend: "gpu" | "cpu", path })
+//     -> { width, height, rgba: Uint8Array, ms }   (rgba: the bytes of `glint render`'s PNG,
+//        with alpha 255; `path` names the scene in errors and anchors its files, default
+//        "scenes/edited.toml")
+//   window.glint.compare(a, b) -> { pixels, differing, beyondOne, maxDiff }
+//   window.glint.gpuStatus     -> the adapter, or why there is no WebGPU
+import init, {
+  Files,
+  GpuRenderer,
+  compare_rgba8,
+  needed_files,
+  render_cpu,
+} from "./glint_web.js";
+
+const $ = (id) => document.getElementById(id);
+const DEFAULT_PATH = "scenes/edited.toml";
+let files = null; // the wasm module's file table, once init() has run
+const unavailable = new Set(); // paths whose fetch failed: asked once
+let gpu = null;
+let gpuStatus = "";
+
+// Fetches what the scene names and the page lacks, by URL relative to the page, until
+// parsing asks for nothing new (an OBJ names its MTL, an MTL its textures).
+async function fetchNeeded(toml, path) {
+  for (let round = 0; round < 16; round++) {
+    const need = needed_files(toml, path, files).filter((p) => !unavailable.has(p));
+    if (need.length === 0) return;
+    await Promise.all(need.map(async (p) => {
+      try {
+        const r = await fetch(p);
+        if (!r.ok) throw new Error(String(r.status));
+        files.add(p, new Uint8Array(await r.arrayBuffer()));
+      } catch {
+        unavailable.add(p);
+      }
+    }));
+  }
+}
+
+async function render(toml, options = {}) {
+  const backend = options.backend ?? "gpu";
+  const path = options.path ?? DEFAULT_PATH;
+  await fetchNeeded(toml, path);
+  let r;
+  if (backend === "cpu") {
+    r = render_cpu(toml, path, files);
+  } else if (backend === "gpu") {
+    if (!gpu) throw new Error(gpuStatus);
+    r = await gpu.render(toml, path, files);
+  } else {
+    throw new Error(`unknown backend ${JSON.stringify(backend)}: "gpu" or "cpu"`);
+  }
+  const out = { width: r.width, height: r.height, rgba: r.rgba, ms: r.ms };
+  r.free();
+  return out;
+}
+
+function compare(a, b) {
+  const c = compare_rgba8(a.rgba, b.rgba, a.width, a.height);
+  const out = {
+    pixels: c.pixels,
+    differing: c.differing,
+    beyondOne: c.beyond_one,
+    maxDiff: c.max_diff,
+    map: c.map,
+  };
+  c.free();
+  return out;
+}
+
+function draw(canvas, width, height, rgba) {
+  canvas.width = width;
+  canvas.height = height;
+  const ctx = canvas.getContext("2d");
+  ctx.putImageData(new ImageData(new Uint8ClampedArray(rgba), width, height), 0, 0);
+}
+
+function clear(canvas) {
+  canvas.width = 1;
+  canvas.height = 1;
+}
+
+// One render of the editor's text on both tracers; a newer edit supersedes an older one.
+let generation = 0;
+async function update() {
+  const mine = ++generation;
+  const toml = $("editor").value;
+  const path = `scenes/${$("scene").value || "edited"}.toml`;
+  let cpu = null, gpuImage = null, error = "";
+  try {
+    cpu = await render(toml, { backend: "cpu", path });
+  } catch (e) {
+    error = String(e.message ?? e);
+  }
+  if (mine !== generation) return;
+  if (cpu && gpu) {
+    try {
+      gpuImage = await render(toml, { backend: "gpu", path });
+    } catch (e) {
+      error = `GPU: ${e.message ?? e}`;
+    }
+  }
+  if (mine !== generation) return;
+  $("error").textContent = error;
+  if (cpu) {
+    draw($("cpu-image"), cpu.width, cpu.height, cpu.rgba);
+    $("cpu-time").textContent = `${cpu.ms.toFixed(1)} ms`;
+  } else {
+    clear($("cpu-image"));
+    $("cpu-time").textContent = "";
+  }
+  if (gpuImage) {
+    draw($("gpu-image"), gpuImage.width, gpuImage.height, gpuImage.rgba);
+    $("gpu-time").textContent = `${gpuImage.ms.toFixed(1)} ms`;
+  } else {
+    clear($("gpu-image"));
+    $("gpu-time").textContent = gpu ? "" : "(no WebGPU)";
+  }
+  const verdict = $("verdict");
+  if (cpu && gpuImage) {
+    const c = compare(gpuImage, cpu);
+    draw($("diff-image"), cpu.width, cpu.height, c.map);
+    if (c.differing === 0) {
+      verdict.textContent = "GPU = CPU in every bit";
+      verdict.className = "same";
+    } else {
+      const pct = (100 * c.differing / c.pixels).toPrecision(2);
+      verdict.textContent =
+        `GPU ≠ CPU: ${c.differing} of ${c.pixels} pixels differ (${pct} %), ` +
+        `${c.beyondOne} by more than 1/255, at most ${c.maxDiff}/255`;
+      verdict.className = "differ";
+    }
+  } else {
+    clear($("diff-image"));
+    verdict.textContent = cpu ? "CPU image only (no GPU image to compare)" : "";
+    verdict.className = "";
+  }
+}
+
+let timer = 0;
+function edited() {
+  clearTimeout(timer);
+  timer = setTimeout(update, 250);
+}
+
+async function pick() {
+  const name = $("scene").value;
+  const r = await fetch(`scenes/${name}.toml`);
+  $("editor").value = r.ok ? await r.text() : `# scenes/${name}.toml: HTTP ${r.status}`;
+  await update();
+}
+
+async function main() {
+  await init();
+  files = new Files();
+  try {
+    if (!navigator.gpu) throw new Error("this browser has no WebGPU (navigator.gpu is missing)");
+    gpu = await GpuRenderer.open();
+    gpuStatus = gpu.describe();
+  } catch (e) {
+    gpu = null;
+    gpuStatus = `${e.message ?? e}: only the CPU image is shown. WebGPU is in Chrome and ` +
+      "Edge 113+, Safari 26+ and Firefox 141+ (Windows; elsewhere behind a setting).";
+  }
+  $("webgpu").textContent = gpuStatus;
+  window.glint = {
+    render,
+    compare: (a, b) => {
+      const { map, ...counts } = compare(a, b);
+      return counts;
+    },
+    get gpuStatus() { return gpuStatus; },
+    hasGpu: gpu !== null,
+  };
+  const index = await (await fetch("scenes/index.json")).json();
+  for (const name of index.scenes) {
+    const o = document.createElement("option");
+    o.value = o.textContent = name;
+    $("scene").append(o);
+  }
+  $("scene").value = index.scenes.includes("bb8") ? "bb8" : index.scenes[0];
+  $("scene").addEventListener("change", pick);
+  $("editor").addEventListener("input", edited);
+  await pick();
+  window.glintReadyResolve();
+}
+
+main().catch((e) => {
+  $("error").textContent = `glint could not start: ${e.message ?? e}`;
+  window.glintReadyReject(e);
+});
