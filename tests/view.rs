@@ -3,7 +3,8 @@
 //! byte, for one sample a pixel and after an antialiased scene's refinement; a saved scene
 //! reloads (a changed light colour), a broken one keeps the viewer running with its error
 //! shown until it is fixed; a scripted orbit leaves a camera that renders the same in a
-//! scene file; no display is a one-line error.
+//! scene file; closing the window (the close button, or the window destroyed) exits 0; no
+//! display is a one-line error.
 
 mod common;
 
@@ -321,6 +322,11 @@ impl Viewer {
     /// Esc, and the exit status.
     fn quit(mut self) -> std::process::ExitStatus {
         self.key("Escape");
+        self.exit_status()
+    }
+
+    /// The exit status, waited for up to 30 s.
+    fn exit_status(&mut self) -> std::process::ExitStatus {
         let t0 = Instant::now();
         loop {
             if let Some(s) = self.child.try_wait().unwrap() {
@@ -438,6 +444,62 @@ fn an_orbit_leaves_a_camera_that_renders_the_same() {
         "the twin: the orbit moved the camera"
     );
     assert!(v.quit().success());
+}
+
+/// What a window manager's close button sends: a WM_PROTOCOLS client message naming
+/// WM_DELETE_WINDOW, to `window` on `display`.
+fn close_button(display: &str, window: u32) {
+    use x11rb::protocol::xproto::{ClientMessageEvent, ConnectionExt, EventMask};
+    let (conn, _) = x11rb::connect(Some(display)).expect("connect to Xvfb");
+    let atom = |name: &[u8]| conn.intern_atom(false, name).unwrap().reply().unwrap().atom;
+    let (protocols, delete) = (atom(b"WM_PROTOCOLS"), atom(b"WM_DELETE_WINDOW"));
+    let event = ClientMessageEvent::new(
+        32,
+        window,
+        protocols,
+        [delete, x11rb::CURRENT_TIME, 0, 0, 0],
+    );
+    conn.send_event(false, window, EventMask::NO_EVENT, event)
+        .unwrap();
+    // A round trip: the server has handled the request before the connection closes.
+    conn.get_input_focus().unwrap().reply().unwrap();
+}
+
+/// Closing the window exits 0 with no error: with the close button a window manager draws
+/// (WM_DELETE_WINDOW), and with the window destroyed under the viewer (`xdotool
+/// windowclose`). The twin: until then the viewer runs.
+#[test]
+fn closing_the_window_exits_0() {
+    let x = Xvfb::start();
+    let dir = Scratch::new("view-close");
+    let mut v = Viewer::start(&x, &scene("bb8"), &dir);
+    v.save(&dir);
+    assert!(
+        v.running(),
+        "the twin: the viewer runs until its window closes"
+    );
+    close_button(&x.display, v.window.parse().unwrap());
+    let s = v.exit_status();
+    let err: Vec<String> = v.err.iter().collect();
+    assert_eq!(s.code(), Some(0), "the close button: {err:#?}");
+    assert!(
+        !err.iter()
+            .any(|l| l.contains("error") || l.contains("panicked")),
+        "{err:#?}"
+    );
+    let dir = Scratch::new("view-destroy");
+    let mut v = Viewer::start(&x, &scene("bb8"), &dir);
+    v.save(&dir);
+    assert!(v.running());
+    v.xdotool(&["windowclose", &v.window.clone()]);
+    let s = v.exit_status();
+    let err: Vec<String> = v.err.iter().collect();
+    assert_eq!(s.code(), Some(0), "the window destroyed: {err:#?}");
+    assert!(
+        !err.iter()
+            .any(|l| l.contains("error") || l.contains("panicked")),
+        "{err:#?}"
+    );
 }
 
 /// With a display but no Vulkan adapter (the loader pointed at no driver): one line, exit

@@ -201,7 +201,9 @@ impl ApplicationHandler<UserEvent> for App {
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         match event {
-            WindowEvent::CloseRequested => event_loop.exit(),
+            // The close button (a window manager's WM_DELETE_WINDOW), or the window destroyed
+            // under the viewer: either ends it with exit status 0.
+            WindowEvent::CloseRequested | WindowEvent::Destroyed => event_loop.exit(),
             WindowEvent::Resized(s) if s.width > 0 && s.height > 0 => {
                 if let Some(v) = &mut self.view
                     && (s.width, s.height) != self.live.size()
