@@ -329,8 +329,9 @@ fn bits(scene: &Scene) -> Vec<u32> {
 }
 
 /// The same textured mesh as an OBJ (its MTL's `map_Kd`, or the scene's textured
-/// material), ASCII and binary PLY and `.glb` renders equal in every f32 bit. The twin:
-/// one texture coordinate changed in the PLY changes the image.
+/// material), ASCII and binary PLY and `.glb` renders equal in every f32 bit, and the
+/// `.glb` with its own texture renders so on the GPU too (every bit on lavapipe). The
+/// twin: one texture coordinate changed in the PLY changes the image.
 #[test]
 fn the_same_textured_mesh_in_every_format_renders_the_same() {
     let dir = Scratch::new("tex-formats");
@@ -357,6 +358,21 @@ fn the_same_textured_mesh_in_every_format_renders_the_same() {
         let s = mesh_scene(&dir, file, material);
         assert!(s.warnings.is_empty(), "{file}: {:?}", s.warnings);
         assert!(bits(&s) == want, "{file} (scene material: {material})");
+    }
+    // The glTF with its own baseColorTexture on the GPU: every bit on lavapipe.
+    if let Some(gpu) = common::gpu() {
+        let (buf, spec) = buffers(
+            &mesh_scene(&dir, "c.glb", false),
+            64,
+            48,
+            TriangleAlgorithm::Watertight,
+        );
+        check_agreement(
+            &render_gpu(gpu, &buf, spec),
+            &glint::cpu::render_f32(&buf, spec),
+            common::is_lavapipe(gpu),
+        )
+        .unwrap_or_else(|e| panic!("c.glb: {e}"));
     }
     let mut moved = cube();
     moved.uv[0][0] += 0.125;
