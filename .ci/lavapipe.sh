@@ -67,6 +67,9 @@ die() {
     say "$*"
     exit 1
 }
+# The private apt helpers shared with web/toolchain.sh.
+# shellcheck source=.ci/debian-apt.sh
+. .ci/debian-apt.sh
 usage="usage: bash .ci/lavapipe.sh [25|26] [-- CMD ARGS...]"
 
 want=25
@@ -110,60 +113,10 @@ mkdir -p "$dir"
 
 mesa_major_of() { sed -n 's/^\([0-9]*\)\..*/\1/p' <<<"$1"; }
 
-# The Debian archive's address, as this machine's apt is configured for bookworm (deb822 or
-# one-line form).
-archive_uri() {
-    local f uri=""
-    for f in /etc/apt/sources.list.d/*.sources; do
-        [ -f "$f" ] || continue
-        uri="$(awk '
-            /^URIs:/   { u = $2 }
-            /^Suites:/ { for (i = 2; i <= NF; i++) if ($i == "bookworm") s = 1 }
-            /^$/       { if (u != "" && s) { print u; exit } u = ""; s = 0 }
-            END        { if (u != "" && s) print u }' "$f" | head -n 1)"
-        [ -n "$uri" ] && break
-    done
-    if [ -z "$uri" ]; then
-        uri="$(cat /etc/apt/sources.list /etc/apt/sources.list.d/*.list 2>/dev/null |
-            awk '$1 == "deb" { for (i = 2; i <= NF; i++) if ($i !~ /^\[/) { if ($(i+1) == "bookworm") print $i; break } }' |
-            head -n 1)"
-    fi
-    [ -n "$uri" ] || die "found no Debian bookworm source in /etc/apt to derive the archive's address from"
-    echo "$uri"
-}
-
 require_bookworm() {
     . /etc/os-release 2>/dev/null || true
     [ "${ID:-}" = debian ] && [ "${VERSION_CODENAME:-}" = bookworm ] ||
         die "this script knows how to fetch Mesa $want on Debian 12 (bookworm) only; this is ${PRETTY_NAME:-unknown}. Install Mesa >= $want and set VK_ICD_FILENAMES to its lvp_icd json."
-}
-
-# private_apt APT_DIR SOURCES_LINE...: a private apt configuration in APT_DIR (sources list,
-# lists, cache), in the array apt_opts. The system's apt.conf(.d) still applies (proxies).
-# Only the Packages indices are fetched (target=Packages in each line).
-private_apt() {
-    local apt_dir="$1"
-    shift
-    mkdir -p "$apt_dir/lists/partial" "$apt_dir/archives/partial" "$apt_dir/etc/preferences.d"
-    printf '%s\n' "$@" >"$apt_dir/etc/sources.list"
-    apt_opts=(
-        -o "Dir::Etc::SourceList=$apt_dir/etc/sources.list"
-        -o "Dir::Etc::SourceParts=-"
-        -o "Dir::Etc::Preferences=$apt_dir/etc/preferences"
-        -o "Dir::Etc::PreferencesParts=$apt_dir/etc/preferences.d"
-        -o "Dir::State::Lists=$apt_dir/lists"
-        -o "Dir::Cache=$apt_dir"
-        -o "Dir::Cache::Archives=$apt_dir/archives"
-        -o "Debug::NoLocking=1"
-        -o "APT::Get::List-Cleanup=0"
-        -o "APT::Sandbox::User=$(id -un)"
-    )
-}
-
-# The newest version of PKG that the private configuration's SUITE offers.
-version_in() {
-    apt-cache "${apt_opts[@]}" madison "$1" 2>/dev/null |
-        awk -F'|' -v suite="$2" 'index($3, " " suite "/") { gsub(/ /, "", $2); print $2; exit }'
 }
 
 # ---- Mesa 25.0: bookworm-backports, on Debian 12's own libc ---------------------------
@@ -197,38 +150,6 @@ fetch_25() {
 }
 
 # ---- Mesa 26.1: trixie-backports, on trixie's own libc through its dynamic loader ----------
-# A keyring that verifies trixie's Release files: the system's, where its
-# debian-archive-keyring has trixie's keys (it ships them as separate files too, which is
-# how this tells), otherwise bookworm's newest debian-archive-keyring, fetched through a
-# private apt configuration verified with the system's bookworm keys.
-trixie_keyring() {
-    local uri="$1" system=/usr/share/keyrings/debian-archive-keyring.gpg kdir v
-    [ -f "$system" ] || die "missing $system (package debian-archive-keyring)"
-    if [ -f /usr/share/keyrings/debian-archive-trixie-stable.gpg ] &&
-        [ -f /usr/share/keyrings/debian-archive-trixie-automatic.gpg ]; then
-        echo "$system"
-        return
-    fi
-    kdir="$dir/keyring"
-    if [ ! -f "$kdir/usr/share/keyrings/debian-archive-trixie-automatic.gpg" ]; then
-        say "the system's debian-archive-keyring lacks trixie's keys; fetching bookworm's newest"
-        private_apt "$kdir/apt" "deb [signed-by=$system target=Packages] $uri bookworm main" \
-            "deb [signed-by=$system target=Packages] $uri bookworm-updates main"
-        apt-get "${apt_opts[@]}" update -qq >&2 || die "apt-get update of bookworm failed"
-        v="$(apt-cache "${apt_opts[@]}" policy debian-archive-keyring 2>/dev/null |
-            awk '/Candidate:/ { print $2 }')"
-        dpkg --compare-versions "${v:-0}" ge 2023.3+deb12u1 ||
-            die "bookworm's debian-archive-keyring ${v:-(none)} has no trixie keys either"
-        rm -rf "${kdir:?}/debs" "${kdir:?}/usr"
-        mkdir -p "$kdir/debs"
-        (cd "$kdir/debs" && apt-get "${apt_opts[@]}" download -qq "debian-archive-keyring=$v" >&2) ||
-            die "apt-get download debian-archive-keyring=$v failed"
-        dpkg -x "$kdir"/debs/debian-archive-keyring_*.deb "$kdir"
-        [ -f "$kdir/usr/share/keyrings/debian-archive-trixie-automatic.gpg" ] ||
-            die "debian-archive-keyring $v has no trixie keys"
-    fi
-    echo "$kdir/usr/share/keyrings/debian-archive-keyring.gpg"
-}
 
 fetch_26() {
     require_bookworm
@@ -236,7 +157,7 @@ fetch_26() {
         die "fetching Mesa 26 is written for amd64 only (its dynamic loader is ld-linux-x86-64.so.2)"
     local uri keyring apt_dir v deb debs version start=$SECONDS
     uri="$(archive_uri)"
-    keyring="$(trixie_keyring "$uri")"
+    keyring="$(trixie_keyring "$uri" "$dir")"
     apt_dir="$dir/apt"
     private_apt "$apt_dir" "deb [signed-by=$keyring target=Packages] $uri trixie main" \
         "deb [signed-by=$keyring target=Packages] $uri trixie-backports main"
@@ -270,17 +191,6 @@ fetch_26() {
     echo "$version" >"$dir/version"
     debs=("$apt_dir"/archives/*.deb)
     say "Mesa $version and ${#debs[@]} packages in all unpacked in $root in $((SECONDS - start)) s"
-}
-
-# Writes FILE from stdin, replacing it (atomically) only when the content differs.
-write_if_changed() {
-    local tmp
-    tmp="$(mktemp "$1.XXXXXX")"
-    cat >"$tmp"
-    if cmp -s "$tmp" "$1"; then rm -f "$tmp"; else
-        chmod "${2:-644}" "$tmp"
-        mv -f "$tmp" "$1"
-    fi
 }
 
 # The ICD json for the unpacked driver, naming its absolute path (written again when the
