@@ -124,6 +124,20 @@ fn scene_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
     v
 }
 
+/// The shading buffers in the order of `SHADING_BINDINGS`: vertex normals, texture
+/// coordinates, texels.
+pub(super) fn shading_buffers(
+    device: &wgpu::Device,
+    buf: &SceneBuffers,
+) -> Result<[wgpu::Buffer; 3], GpuError> {
+    let none = wgpu::BufferUsages::empty();
+    Ok([
+        storage_buffer(device, "vertex normals", &buf.normals, none)?,
+        storage_buffer(device, "texture coordinates", &buf.uvs, none)?,
+        storage_buffer(device, "texels", &buf.texels, none)?,
+    ])
+}
+
 /// A storage buffer holding `data`, or one zeroed element when `data` is empty (WGSL has
 /// no empty bindings). Fails when the device's limits are smaller than the data.
 pub(super) fn storage_buffer<T: Pod + Default>(
@@ -446,6 +460,46 @@ impl Kernel {
         entries
     }
 
+    /// Where `entry`'s image goes and the bind-group layout of that entry point (`render`
+    /// and `render_rgba8`).
+    fn output_binding(&self, entry: Entry) -> (u32, &wgpu::BindGroupLayout) {
+        match entry {
+            Entry::RenderRgba8 => (RGBA8_BINDING, &self.rgba8_layout),
+            _ => (IMAGE_BINDING, &self.render_layout),
+        }
+    }
+
+    /// The bind group of a render entry point (`render` or `render_rgba8`): the scene's
+    /// entries ([`Kernel::scene_bindings`]), `output` where `entry` writes, and the shading
+    /// buffers ([`shading_buffers`]) at `SHADING_BINDINGS`.
+    pub(super) fn render_bind_group(
+        &self,
+        device: &wgpu::Device,
+        entry: Entry,
+        scene: &[wgpu::Buffer; 7],
+        shading: &[wgpu::Buffer; 3],
+        accel: Option<&super::rq::Accel>,
+        output: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        let (out_binding, layout) = self.output_binding(entry);
+        let mut entries = self.scene_bindings(scene, accel);
+        entries.push(wgpu::BindGroupEntry {
+            binding: out_binding,
+            resource: output.as_entire_binding(),
+        });
+        for (binding, b) in SHADING_BINDINGS.into_iter().zip(shading) {
+            entries.push(wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            });
+        }
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("render"),
+            layout,
+            entries: &entries,
+        })
+    }
+
     /// The driver's acceleration structure over `buf`'s triangles for the ray-query
     /// kernel (built and waited for); `None` for the others.
     pub(super) fn accel(
@@ -602,10 +656,6 @@ impl Kernel {
         let (width, height) = (buf.params.width, buf.params.height);
         let mut timings = GpuTimings::default();
         let (pipeline, compile) = self.pipeline(device, spec, entry)?;
-        let (out_binding, layout) = match entry {
-            Entry::RenderRgba8 => (RGBA8_BINDING, &self.rgba8_layout),
-            _ => (IMAGE_BINDING, &self.render_layout),
-        };
         let px_bytes = size_of::<T>() as u64;
         timings.compile = compile;
 
@@ -626,12 +676,7 @@ impl Kernel {
         let (scene, shading, output, staging) =
             scoped(device, "upload", || -> Result<_, GpuError> {
                 let scene = self.scene_buffers(device, buf)?;
-                let none = wgpu::BufferUsages::empty();
-                let shading = [
-                    storage_buffer(device, "vertex normals", &buf.normals, none)?,
-                    storage_buffer(device, "texture coordinates", &buf.uvs, none)?,
-                    storage_buffer(device, "texels", &buf.texels, none)?,
-                ];
+                let shading = shading_buffers(device, buf)?;
                 let output = device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("image"),
                     size: tile_bytes,
@@ -648,22 +693,8 @@ impl Kernel {
             })??;
         let accel = self.accel(device, queue, buf)?;
         timings.accel = accel.as_ref().map_or(Duration::ZERO, |a| a.build);
-        let mut entries = self.scene_bindings(&scene, accel.as_ref());
-        entries.push(wgpu::BindGroupEntry {
-            binding: out_binding,
-            resource: output.as_entire_binding(),
-        });
-        for (binding, b) in SHADING_BINDINGS.into_iter().zip(&shading) {
-            entries.push(wgpu::BindGroupEntry {
-                binding,
-                resource: b.as_entire_binding(),
-            });
-        }
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("render"),
-            layout,
-            entries: &entries,
-        });
+        let bind_group =
+            self.render_bind_group(device, entry, &scene, &shading, accel.as_ref(), &output);
         timings.upload = t0.elapsed().saturating_sub(timings.accel);
         // From here on only the parameters are read from the host.
         let frame_params = buf.params;

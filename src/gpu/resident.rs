@@ -9,7 +9,7 @@ use std::time::Duration;
 use web_time::Instant;
 
 use super::GpuError;
-use super::kernel::{Entry, Kernel, RENDER_WORKGROUP, RGBA8_BINDING, SHADING_BINDINGS};
+use super::kernel::{Entry, Kernel, RENDER_WORKGROUP, shading_buffers};
 use super::sync::{check_size, scoped, wait};
 use crate::buffers::{Params, SceneBuffers, Specialisation};
 
@@ -42,12 +42,7 @@ impl Kernel {
         check_size(device, "the frame", bytes)?;
         let (scene, shading, output) = scoped(device, "upload", || -> Result<_, GpuError> {
             let scene = self.scene_buffers(device, buf)?;
-            let none = wgpu::BufferUsages::empty();
-            let shading = [
-                super::kernel::storage_buffer(device, "vertex normals", &buf.normals, none)?,
-                super::kernel::storage_buffer(device, "texture coordinates", &buf.uvs, none)?,
-                super::kernel::storage_buffer(device, "texels", &buf.texels, none)?,
-            ];
+            let shading = shading_buffers(device, buf)?;
             let output = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("frame (rgba8)"),
                 size: bytes,
@@ -57,23 +52,14 @@ impl Kernel {
             Ok((scene, shading, output))
         })??;
         let accel = self.accel(device, queue, buf)?;
-        let mut entries = self.scene_bindings(&scene, accel.as_ref());
-        entries.push(wgpu::BindGroupEntry {
-            binding: RGBA8_BINDING,
-            resource: output.as_entire_binding(),
-        });
-        for (binding, b) in SHADING_BINDINGS.into_iter().zip(&shading) {
-            entries.push(wgpu::BindGroupEntry {
-                binding,
-                resource: b.as_entire_binding(),
-            });
-        }
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("resident"),
-            layout: &self.rgba8_layout,
-            entries: &entries,
-        });
-        drop(entries);
+        let bind_group = self.render_bind_group(
+            device,
+            Entry::RenderRgba8,
+            &scene,
+            &shading,
+            accel.as_ref(),
+            &output,
+        );
         let [params, rest @ ..] = scene;
         Ok(Resident {
             pipeline,
