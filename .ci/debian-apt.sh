@@ -1,5 +1,6 @@
 # Functions to fetch Debian packages into a private folder without touching the system:
-# a private apt configuration, the archive's address, trixie's keyring, idempotent writes.
+# a private apt configuration (trixie's too), the archive's address, trixie's keyring,
+# idempotent writes.
 # Sourced by .ci/lavapipe.sh (Mesa's lavapipe) and web/toolchain.sh (the wasm toolchain),
 # from the repository's root; the sourcing script defines `say MESSAGE` and `die MESSAGE`
 # (which exits) and runs under `set -euo pipefail`.
@@ -98,4 +99,25 @@ write_if_changed() {
         chmod "${2:-644}" "$tmp"
         mv -f "$tmp" "$1"
     fi
+}
+
+# trixie_apt APT_DIR KEYRING URI: a private apt configuration (private_apt) for trixie and
+# trixie-backports from the archive at URI, verified with KEYRING, with its package lists
+# fetched. Its dpkg status is empty: apt resolves every dependency as if nothing were
+# installed, so a download is a whole userland (libc6 included), none of it Debian 12's.
+# Recommends and Suggests are left out.
+trixie_apt() {
+    local apt_dir="$1" keyring="$2" uri="$3"
+    private_apt "$apt_dir" "deb [signed-by=$keyring target=Packages] $uri trixie main" \
+        "deb [signed-by=$keyring target=Packages] $uri trixie-backports main"
+    : >"$apt_dir/status"
+    apt_opts+=(
+        -o "Dir::State::status=$apt_dir/status"
+        -o "Dir::State::extended_states=$apt_dir/extended_states"
+        -o "Dir::Log=$apt_dir/log"
+        -o "APT::Install-Recommends=0"
+        -o "APT::Install-Suggests=0"
+    )
+    say "fetching the trixie and trixie-backports package lists (private apt configuration in $apt_dir)"
+    apt-get "${apt_opts[@]}" update -qq >&2 || die "apt-get update of trixie and trixie-backports failed"
 }

@@ -159,20 +159,7 @@ fetch_26() {
     uri="$(archive_uri)"
     keyring="$(trixie_keyring "$uri" "$dir")"
     apt_dir="$dir/apt"
-    private_apt "$apt_dir" "deb [signed-by=$keyring target=Packages] $uri trixie main" \
-        "deb [signed-by=$keyring target=Packages] $uri trixie-backports main"
-    # An empty dpkg status: apt resolves every dependency as if nothing were installed, so
-    # the download is the driver's whole userland (libc6 included), none of it Debian 12's.
-    : >"$apt_dir/status"
-    apt_opts+=(
-        -o "Dir::State::status=$apt_dir/status"
-        -o "Dir::State::extended_states=$apt_dir/extended_states"
-        -o "Dir::Log=$apt_dir/log"
-        -o "APT::Install-Recommends=0"
-        -o "APT::Install-Suggests=0"
-    )
-    say "fetching the trixie and trixie-backports package lists (private apt configuration in $apt_dir)"
-    apt-get "${apt_opts[@]}" update -qq >&2 || die "apt-get update of trixie and trixie-backports failed"
+    trixie_apt "$apt_dir" "$keyring" "$uri"
     v="$(version_in mesa-vulkan-drivers trixie-backports)"
     [ -n "$v" ] || die "trixie-backports has no mesa-vulkan-drivers"
     [ "$(mesa_major_of "${v#*:}")" -ge 26 ] ||
