@@ -25,7 +25,7 @@
 #   and rustup cannot add one: it fetches `rustc`, `cargo` and `libstd-rust-dev-wasm32` from
 #   Debian 13's `trixie-backports` (all of rustc's source package pinned there, as
 #   backports are not taken by default), and for its wasm-ld the `lld-NN` of rustc's own
-#   LLVM (the one libstd-rust-dev-wasm32 recommends: lld-22, from trixie, for rustc 1.97),
+#   LLVM (the one libstd-rust-dev-wasm32 recommends: lld-22, from trixie, for rustc 1.97 and 1.98),
 #   with all their dependencies from `trixie` and `trixie-backports`, resolved against an EMPTY
 #   private dpkg status file, so apt takes every dependency as not installed (libc6,
 #   libstdc++6 and libLLVM among them). Those programs need a newer glibc, libstdc++ and LLVM
