@@ -85,6 +85,15 @@ function clear(canvas) {
   canvas.height = 1;
 }
 
+// An error's text for the page: a trap in the wasm is a panic, whose message went to the
+// console (the crate's panic hook).
+function message(e) {
+  const m = String(e?.message ?? e);
+  return e instanceof WebAssembly.RuntimeError
+    ? `glint panicked (${m}), a defect: the browser's console has its message`
+    : m;
+}
+
 // One render of the editor's text on both tracers; a newer edit supersedes an older one.
 let generation = 0;
 async function update() {
@@ -95,14 +104,14 @@ async function update() {
   try {
     cpu = await render(toml, { backend: "cpu", path });
   } catch (e) {
-    error = String(e.message ?? e);
+    error = message(e);
   }
   if (mine !== generation) return;
   if (cpu && gpu) {
     try {
       gpuImage = await render(toml, { backend: "gpu", path });
     } catch (e) {
-      error = `GPU: ${e.message ?? e}`;
+      error = `GPU: ${message(e)}`;
     }
   }
   if (mine !== generation) return;

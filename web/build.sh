@@ -41,7 +41,10 @@ wasm=target/wasm/wasm32-unknown-unknown/release/glint_web.wasm
 
 rm -rf "$dist"
 mkdir -p "$dist/scenes"
-"$bindgen" --target web --no-typescript --out-dir "$dist" "$wasm"
+# Without the function-name and producers sections: 1.16 MB less (0.13 MB less gzipped). A
+# panic's message, file and line still reach the console; its stack shows function indices.
+"$bindgen" --target web --no-typescript --remove-name-section --remove-producers-section \
+    --out-dir "$dist" "$wasm"
 cp web/index.html web/app.js web/style.css "$dist/"
 
 # The scenes that need nothing outside the repository (no meshes/ download), with the

@@ -11,6 +11,7 @@
 //!   which fetches them by URL; the scene is parsed with a reader over what it has, and
 //!   what is missing is asked for by name.
 //! - [`compare_rgba8`]: the counts the page's verdict shows, and a difference map.
+//! - [`start`]: panics reach the browser's console with their message.
 //!
 //! Assumption: a frame fits one WebGPU storage buffer (`4 × width × height` bytes under the
 //! device's `maxStorageBufferBindingSize`); a larger one is refused with the limit named.
@@ -28,6 +29,20 @@ use glint::gpu::Gpu;
 use glint::scene::{ReadError, Scene};
 use glint::{Backend, RenderOptions, Renderer};
 use wasm_bindgen::prelude::*;
+
+#[wasm_bindgen]
+extern "C" {
+    #[wasm_bindgen(js_namespace = console, js_name = error)]
+    fn console_error(message: &str);
+}
+
+/// Runs when the module is instantiated: a panic (a defect; bad input is an `Err`) writes
+/// its message, file and line to the console before the wasm traps, which alone would say
+/// only "unreachable".
+#[wasm_bindgen(start)]
+pub fn start() {
+    std::panic::set_hook(Box::new(|info| console_error(&format!("glint: {info}"))));
+}
 
 /// Files a scene names (meshes, MTLs, textures), by the path the scene resolves them to
 /// (relative to the page, as the scene's own path is).
