@@ -465,41 +465,37 @@ fn close_button(display: &str, window: u32) {
     conn.get_input_focus().unwrap().reply().unwrap();
 }
 
+/// A viewer on bb8 that has saved a view (so it runs, the twin), closed by `close`: its exit
+/// status is 0 and its stderr has no error and no panic.
+fn closes_cleanly(x: &Xvfb, how: &str, close: impl FnOnce(&Viewer)) {
+    let dir = Scratch::new(&format!("view-{how}"));
+    let mut v = Viewer::start(x, &scene("bb8"), &dir);
+    v.save(&dir);
+    assert!(
+        v.running(),
+        "{how}: the twin: the viewer runs until its window closes"
+    );
+    close(&v);
+    let s = v.exit_status();
+    let err: Vec<String> = v.err.iter().collect();
+    assert_eq!(s.code(), Some(0), "{how}: {err:#?}");
+    assert!(
+        !err.iter()
+            .any(|l| l.contains("error") || l.contains("panicked")),
+        "{how}: {err:#?}"
+    );
+}
+
 /// Closing the window exits 0 with no error: with the close button a window manager draws
 /// (WM_DELETE_WINDOW), and with the window destroyed under the viewer (`xdotool
 /// windowclose`). The twin: until then the viewer runs.
 #[test]
 fn closing_the_window_exits_0() {
     let x = Xvfb::start();
-    let dir = Scratch::new("view-close");
-    let mut v = Viewer::start(&x, &scene("bb8"), &dir);
-    v.save(&dir);
-    assert!(
-        v.running(),
-        "the twin: the viewer runs until its window closes"
-    );
-    close_button(&x.display, v.window.parse().unwrap());
-    let s = v.exit_status();
-    let err: Vec<String> = v.err.iter().collect();
-    assert_eq!(s.code(), Some(0), "the close button: {err:#?}");
-    assert!(
-        !err.iter()
-            .any(|l| l.contains("error") || l.contains("panicked")),
-        "{err:#?}"
-    );
-    let dir = Scratch::new("view-destroy");
-    let mut v = Viewer::start(&x, &scene("bb8"), &dir);
-    v.save(&dir);
-    assert!(v.running());
-    v.xdotool(&["windowclose", &v.window.clone()]);
-    let s = v.exit_status();
-    let err: Vec<String> = v.err.iter().collect();
-    assert_eq!(s.code(), Some(0), "the window destroyed: {err:#?}");
-    assert!(
-        !err.iter()
-            .any(|l| l.contains("error") || l.contains("panicked")),
-        "{err:#?}"
-    );
+    closes_cleanly(&x, "close-button", |v| {
+        close_button(&v.display, v.window.parse().unwrap())
+    });
+    closes_cleanly(&x, "destroyed", |v| v.xdotool(&["windowclose", &v.window]));
 }
 
 /// With a display but no Vulkan adapter (the loader pointed at no driver): one line, exit

@@ -140,7 +140,7 @@ pub(super) fn shading_buffers(
 
 /// A storage buffer holding `data`, or one zeroed element when `data` is empty (WGSL has
 /// no empty bindings). Fails when the device's limits are smaller than the data.
-pub(super) fn storage_buffer<T: Pod + Default>(
+fn storage_buffer<T: Pod + Default>(
     device: &wgpu::Device,
     what: &'static str,
     data: &[T],
