@@ -1,17 +1,19 @@
-// glint's kernel, part 1 of 5: what the parts share. The override constants, the
+// glint's kernel, part 1 of 6: what the parts share. The override constants, the
 // constants, the structs shared with Rust and their bindings, the ray and hit records and
 // the small helpers.
 //
-// The kernel is `common.wgsl` + `prims.wgsl` + `texture.wgsl` + `trace.wgsl` + `whitted.wgsl`,
-// joined in that order at build time (`src/gpu/mod.rs`, `SHADER_SOURCE`). Each part has its
-// mirror in `src/cpu/` with the same stem (`common.rs`, `prims.rs`, `texture.rs`, `trace.rs`,
-// `whitted.rs`): every function, with the same name, in
+// The kernel is `exact.wgsl` + `common.wgsl` + `prims.wgsl` + `texture.wgsl` + `trace.wgsl` +
+// `whitted.wgsl`, joined in that order at build time (`src/gpu/mod.rs`, `SHADER_SOURCE`). Each
+// part has its mirror in `src/cpu/` with the same stem (`exact.rs`, `common.rs`, `prims.rs`,
+// `texture.rs`, `trace.rs`, `whitted.rs`): every function, with the same name, in
 // the same order, with the same operations in the same order. Change both in one commit;
 // the GPU-against-CPU tests catch the one that was forgotten.
 //
-// Rules that keep the two bit-identical on lavapipe:
-// - only `+ - * /`, `sqrt`, `dot`, `normalize` and comparisons on floats; `fma` never;
-//   `pow` only for a non-integer Phong exponent (the one documented difference);
+// Rules that keep the two bit-identical on every driver that takes the SPIR-V as written:
+// - only `+ - *`, `dot` and comparisons on floats, which Vulkan rounds correctly; every
+//   division, square root and normalisation through `div_rn`, `sqrt_rn`, `normalize_rn`
+//   (exact.wgsl), a non-integer power through `pow_det`; `fma`, `exp2`, `log2`, `pow` and
+//   the trigonometric functions never;
 // - never a sum of two products by one shared factor (`a * r + b * r`): lavapipe's NIR
 //   rewrites it as `(a + b) * r` (an inexact algebraic rule), Rust does not; write the
 //   factored form on both sides (see `hit_triangle_moller_trumbore`);
@@ -67,7 +69,6 @@ const TRIANGLE_BIT: u32 = 0x80000000u;
 // above f32::MAX, and Tint (Chrome) refuses a literal that is not representable.
 const INFINITY: f32 = 0x1.fffffep+127f;
 const SHADOW_EPSILON: f32 = 1.1920929e-7; // see buffers::SHADOW_EPSILON
-const SPLITTER: f32 = 4097.0; // 2^12 + 1, Veltkamp's split for f32
 const BVH_STACK: u32 = 48u; // bvh::MAX_DEPTH: the builder never makes a deeper tree
 const BOX_SLACK: f32 = 4.76837158e-7; // 4 ε ≥ 2γ(3): pbrt's conservative slab test
 const NAIVE_MIN_SIN2: f32 = 1.9073486e-6; // 16 ε: see buffers::NAIVE_MIN_SIN2

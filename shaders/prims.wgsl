@@ -1,4 +1,4 @@
-// glint's kernel, part 2 of 5: the primitives (after `common.wgsl`; see its header for
+// glint's kernel, part 2 of 6: the primitives (after `common.wgsl`; see its header for
 // how the parts are joined and mirrored). Everything that knows what a sphere or a
 // triangle is lives here: the intersection tests, and the only switches on a primitive's
 // kind, `hit_prim`, `is_triangle` (for `prim_normal` and `prim_material`) and `shading_at`
@@ -18,16 +18,16 @@ fn hit_sphere(ray: Ray, s: Sphere, t_min: f32, t_max: f32) -> f32 {
     let f = ray.origin - s.center;
     let a = dot(ray.dir, ray.dir);
     let b = -dot(f, ray.dir);
-    let perp = f + ray.dir * (b / a);
+    let perp = f + ray.dir * div_rn(b, a);
     let r2 = s.radius * s.radius;
     let disc = a * (r2 - dot(perp, perp));
     if !(disc >= 0.0) {
         return INFINITY;
     }
     let c = dot(f, f) - r2;
-    let q = b + select(-1.0, 1.0, b >= 0.0) * sqrt(disc);
-    let t0 = c / q;
-    let t1 = q / a;
+    let q = b + select(-1.0, 1.0, b >= 0.0) * sqrt_rn(disc);
+    let t0 = div_rn(c, q);
+    let t1 = div_rn(q, a);
     let near = select(t1, t0, t0 < t1);
     let far = select(t0, t1, t0 < t1);
     if in_interval(near, t_min, t_max) {
@@ -52,12 +52,12 @@ fn hit_triangle_naive(ray: Ray, tri: Triangle, t_min: f32, t_max: f32) -> vec3<f
     if !(len2 > 0.0) {
         return miss; // degenerate: no plane
     }
-    let n = normalize(cr);
+    let n = normalize_rn(cr);
     let dn = dot(ray.dir, n);
     if dn == 0.0 {
         return miss; // parallel to the plane
     }
-    let t = (dot(tri.a, n) - dot(ray.origin, n)) / dn;
+    let t = div_rn(dot(tri.a, n) - dot(ray.origin, n), dn);
     if !in_interval(t, t_min, t_max) {
         return miss;
     }
@@ -72,8 +72,8 @@ fn hit_triangle_naive(ray: Ray, tri: Triangle, t_min: f32, t_max: f32) -> vec3<f
     if !(denom > d00 * d11 * NAIVE_MIN_SIN2) {
         return miss; // a sliver: denom is mostly rounding (buffers::NAIVE_MIN_SIN2)
     }
-    let u = (d11 * d20 - d01 * d21) / denom;
-    let v = (d00 * d21 - d01 * d20) / denom;
+    let u = div_rn(d11 * d20 - d01 * d21, denom);
+    let v = div_rn(d00 * d21 - d01 * d20, denom);
     if u >= 0.0 && v >= 0.0 && u + v <= 1.0 {
         return vec3<f32>(t, u, v);
     }
@@ -96,7 +96,7 @@ fn hit_triangle_moller_trumbore(ray: Ray, tri: Triangle, t_min: f32, t_max: f32)
     if det == 0.0 || det != det {
         return miss; // parallel, degenerate, or NaN
     }
-    let inv_det = 1.0 / det;
+    let inv_det = div_rn(1.0, det);
     let s = ray.origin - tri.a;
     let su = dot(s, p);
     let u = su * inv_det;
@@ -144,20 +144,8 @@ fn make_shear(dir: vec3<f32>) -> Shear {
         kx = ky;
         ky = tmp;
     }
-    let sz = 1.0 / dir[kz];
+    let sz = div_rn(1.0, dir[kz]);
     return Shear(kx, ky, kz, dir[kx] * sz, dir[ky] * sz, sz);
-}
-
-/// The rounding error of the f32 product `a * b` (Dekker's TwoProduct without fma):
-/// a * b == fl(a * b) + product_error(a, b, fl(a * b)) exactly, barring under/overflow.
-fn product_error(a: f32, b: f32, p: f32) -> f32 {
-    let ca = SPLITTER * a;
-    let a_hi = ca - (ca - a);
-    let a_lo = a - a_hi;
-    let cb = SPLITTER * b;
-    let b_hi = cb - (cb - b);
-    let b_lo = b - b_hi;
-    return ((a_hi * b_hi - p) + a_hi * b_lo + a_lo * b_hi) + a_lo * b_lo;
 }
 
 /// The edge function x1·y2 − y1·x2 with an exact sign.
@@ -204,7 +192,7 @@ fn hit_triangle_watertight(ray: Ray, sh: Shear, tri: Triangle, t_min: f32, t_max
     let bz = sh.sz * b[sh.kz];
     let cz = sh.sz * c[sh.kz];
     let t_scaled = u * az + v * bz + w * cz;
-    let inv_det = 1.0 / det;
+    let inv_det = div_rn(1.0, det);
     let t = t_scaled * inv_det;
     if !in_interval(t, t_min, t_max) {
         return miss;
@@ -265,10 +253,10 @@ fn is_triangle(id: u32) -> bool {
 fn prim_normal(hit: Hit, p: vec3<f32>) -> vec3<f32> {
     if is_triangle(hit.prim) {
         let tri = triangles[hit.prim & ~TRIANGLE_BIT];
-        return normalize(cross3(tri.b - tri.a, tri.c - tri.a));
+        return normalize_rn(cross3(tri.b - tri.a, tri.c - tri.a));
     }
     let s = spheres[hit.prim];
-    return normalize(p - s.center);
+    return normalize_rn(p - s.center);
 }
 
 /// The material index of the hit primitive.
@@ -320,5 +308,5 @@ fn shading_at(hit: Hit, p: vec3<f32>, n: vec3<f32>) -> Shading {
     let db = max0(dot(tri.b - p, nb));
     let dc = max0(dot(tri.c - p, nc));
     let lifted = p + na * (w * da) + nb * (hit.u * db) + nc * (hit.v * dc);
-    return Shading(normalize(mixed), lifted);
+    return Shading(normalize_rn(mixed), lifted);
 }

@@ -1,4 +1,4 @@
-// glint's kernel, part 4 of 5: rays through the scene (after `common.wgsl` and
+// glint's kernel, part 4 of 6: rays through the scene (after `common.wgsl` and
 // `prims.wgsl`; see the first's header for how the parts are joined and mirrored). The
 // camera, the searches for the nearest hit and for a blocker (every primitive, or the
 // BVH), shading, and the entry points. Mirror: `src/cpu/trace.rs`.
@@ -8,9 +8,9 @@
 /// The primary ray through the point (dx, dy) of pixel (i, j), each in [0, 1) from its
 /// top-left corner; the README's camera formula, left to right (the centre is (0.5, 0.5)).
 fn camera_ray(i: u32, j: u32, dx: f32, dy: f32) -> Ray {
-    let x = ((f32(i) + dx) / f32(params.width) * 2.0 - 1.0) * params.tan_half * params.aspect;
-    let y = (1.0 - (f32(j) + dy) / f32(params.height) * 2.0) * params.tan_half;
-    let dir = normalize(params.forward + params.right * x + params.up * y);
+    let x = (div_rn(f32(i) + dx, f32(params.width)) * 2.0 - 1.0) * params.tan_half * params.aspect;
+    let y = (1.0 - div_rn(f32(j) + dy, f32(params.height)) * 2.0) * params.tan_half;
+    let dir = normalize_rn(params.forward + params.right * x + params.up * y);
     return Ray(params.eye, dir);
 }
 
@@ -125,7 +125,7 @@ fn nearer(t: f32, id: u32, best: Hit) -> bool {
 fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
     let sh = ray_shear(ray.dir);
-    let inv_dir = 1.0 / ray.dir;
+    let inv_dir = div3_rn(vec3<f32>(1.0), ray.dir);
     if params.n_nodes == 0u {
         return best;
     }
@@ -188,7 +188,7 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
 /// helper measured 40% slower; docs/bench/meshes.md).
 fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
     let sh = ray_shear(ray.dir);
-    let inv_dir = 1.0 / ray.dir;
+    let inv_dir = div3_rn(vec3<f32>(1.0), ray.dir);
     if params.n_nodes == 0u {
         return false;
     }
@@ -273,13 +273,13 @@ fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
 
 // ---- shading -----------------------------------------------------------------------------
 
-/// `base^n` for the material's exponent: by squaring when `n_int >= 0` (so lavapipe and
-/// Rust agree bit for bit, and 0^0 = 1 on both), else `pow` (differs by a few ULP); 0 where
+/// `base^n` for the material's exponent: by squaring when `n_int >= 0` (0^0 = 1), else
+/// `pow_det` (exact.wgsl: never the driver's `exp2` and `log2`); 0 where
 /// the power is subnormal (`flush`: base ≤ 1, so every product on the way is at most the
 /// last, and a driver that flushes a subnormal step ends at 0 too).
 fn phong_power(base: f32, m: Material) -> f32 {
     if m.n_int < 0 {
-        return flush(pow(base, m.n));
+        return flush(pow_det(base, m.n));
     }
     var result = 1.0;
     var b = base;
@@ -313,7 +313,7 @@ fn spot_factor(light: Light, c: f32) -> f32 {
     if c >= light.cos_inner {
         return 1.0;
     }
-    let s = (c - light.cos_outer) / (light.cos_inner - light.cos_outer);
+    let s = div_rn(c - light.cos_outer, light.cos_inner - light.cos_outer);
     return s * s * (3.0 - 2.0 * s);
 }
 
@@ -335,14 +335,14 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
         // origin − (origin + dir·t), which loses low bits to cancellation, and which
         // lavapipe's compiler folds to −dir·t while Rust rounds p first, so the two
         // tracers disagreed in low bits under sharp highlights.
-        let v = normalize(-ray.dir);
+        let v = normalize_rn(-ray.dir);
         for (var k = 0u; k < params.n_lights; k = k + 1u) {
             let light = lights[k];
             var to_light = light.position - p;
             if LIGHT_KINDS && light.kind == LIGHT_DIRECTIONAL {
                 to_light = -light.direction;
             }
-            let l = normalize(to_light);
+            let l = normalize_rn(to_light);
             let ndl = dot(sh.n, l);
             if !(ndl > 0.0) {
                 continue;
@@ -397,7 +397,7 @@ fn trace_sample(i: u32, j: u32, dx: f32, dy: f32) -> vec4<f32> {
 
 /// The position of sample s of n along a pixel side: (s + 0.5) / n.
 fn sample_offset(s: u32, n: u32) -> f32 {
-    return (f32(s) + 0.5) / f32(n);
+    return div_rn(f32(s) + 0.5, f32(n));
 }
 
 /// The colour of pixel (i, j) and, in w, the hit distance (−1 for a miss). With
@@ -424,7 +424,7 @@ fn trace_pixel(i: u32, j: u32) -> vec4<f32> {
             }
         }
     }
-    return vec4<f32>(flush3(sum / f32(n * n)), t_near);
+    return vec4<f32>(flush3(div3s_rn(sum, f32(n * n))), t_near);
 }
 
 // ---- entry points ------------------------------------------------------------------------

@@ -85,7 +85,7 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     let r = subgroupExclusiveAdd(1u) & 7u;
     var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
     let sh = ray_shear(ray.dir);
-    let inv_dir = 1.0 / ray.dir;
+    let inv_dir = div3_rn(vec3<f32>(1.0), ray.dir);
     if params.n_nodes == 0u {
         return best;
     }

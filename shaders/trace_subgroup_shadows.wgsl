@@ -21,7 +21,7 @@ fn occluded_bvh(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
     }
     let r = subgroupExclusiveAdd(1u) & 7u;
     let sh = ray_shear(ray.dir);
-    let inv_dir = 1.0 / ray.dir;
+    let inv_dir = div3_rn(vec3<f32>(1.0), ray.dir);
     if params.n_nodes == 0u {
         return false;
     }

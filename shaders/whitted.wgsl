@@ -1,4 +1,4 @@
-// glint's kernel, part 5 of 5: Whitted's secondary rays (1980), compiled in only where a
+// glint's kernel, part 5 of 6: Whitted's secondary rays (1980), compiled in only where a
 // scene has a mirror or glass (`WHITTED`). CPU mirror: `src/cpu/whitted.rs`, function for
 // function.
 //
@@ -54,10 +54,10 @@ fn fresnel_dielectric(cos_i: f32, eta: f32, sin2_t: f32) -> f32 {
     if sin2_t >= 1.0 {
         return 1.0;
     }
-    let cos_t = sqrt(max0(1.0 - sin2_t));
-    let r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return flush((flush(r_parl * r_parl) + flush(r_perp * r_perp)) / 2.0);
+    let cos_t = sqrt_rn(max0(1.0 - sin2_t));
+    let r_parl = div_rn(eta * cos_i - cos_t, eta * cos_i + cos_t);
+    let r_perp = div_rn(cos_i - eta * cos_t, cos_i + eta * cos_t);
+    return flush(div_rn(flush(r_parl * r_parl) + flush(r_perp * r_perp), 2.0));
 }
 
 /// The origin of a secondary ray leaving the hit `p` of a ray from `o`, on the side of the
@@ -102,13 +102,13 @@ fn push_children(stack: ptr<function, array<Pending, WHITTED_STACK>>, sp: u32, r
         n = -n;
     }
     let sh = shading_at(hit, p, n);
-    let d = normalize(ray.dir);
+    let d = normalize_rn(ray.dir);
     let cos_i = max0(-dot(d, sh.n));
     var eta = m.ior;
     if !entering {
-        eta = 1.0 / m.ior;
+        eta = div_rn(1.0, m.ior);
     }
-    let sin2_t = max0(1.0 - cos_i * cos_i) / (eta * eta);
+    let sin2_t = div_rn(max0(1.0 - cos_i * cos_i), eta * eta);
     let tir = transmits && sin2_t >= 1.0;
     var wr = m.kr;
     var wt = m.kt;
@@ -123,8 +123,8 @@ fn push_children(stack: ptr<function, array<Pending, WHITTED_STACK>>, sp: u32, r
     var top = sp;
     let w_t = flush3(weight * wt);
     if transmits && !tir && worth_tracing(w_t) {
-        let cos_t = sqrt(max0(1.0 - sin2_t));
-        let t = keep_side(d / eta + sh.n * (cos_i / eta - cos_t), n, -1.0);
+        let cos_t = sqrt_rn(max0(1.0 - sin2_t));
+        let t = keep_side(div3s_rn(d, eta) + sh.n * (div_rn(cos_i, eta) - cos_t), n, -1.0);
         (*stack)[top] = Pending(spawn_origin(ray.origin, p, -n), depth + 1u, t, w_t);
         top = top + 1u;
     }

@@ -97,6 +97,8 @@ pub struct Options {
     pub backends: Vec<Backend>,
     /// The device, for the GPU rows.
     pub gpu: GpuOptions,
+    /// The GPU kernel's division and square root.
+    pub math: crate::buffers::Math,
 }
 
 impl Default for Options {
@@ -108,6 +110,7 @@ impl Default for Options {
             runs: 5,
             backends: vec![Backend::Gpu, Backend::GpuRq, Backend::Cpu, Backend::CpuF64],
             gpu: GpuOptions::default(),
+            math: crate::buffers::Math::Exact,
         }
     }
 }
@@ -181,7 +184,10 @@ pub fn run(
                 })
                 .collect(),
         );
-        let spec = Specialisation::for_scene(&buf);
+        let spec = Specialisation::for_scene(&buf).with_math(crate::buffers::MathMode {
+            math: options.math,
+            inexact_driver: false,
+        });
         let truth = crate::cpu::render_f64(scene, &buf, spec);
         let mirror = crate::cpu::render_f32(&buf, spec);
         let mut rower = Rower {
@@ -300,7 +306,7 @@ fn gpu_rows(
 ) -> Result<(), RenderError> {
     let mut tracers: Vec<(TracerKind, &Kernel, Specialisation)> = Vec::new();
     if options.wants(Backend::Gpu) {
-        let general = Specialisation::general(buf);
+        let general = Specialisation::general(buf).with_math(spec.math);
         tracers.push((TracerKind::Gpu, gpu.compute_kernel(spec)?, spec));
         tracers.push((
             TracerKind::GpuGeneral,

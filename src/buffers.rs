@@ -383,6 +383,86 @@ pub struct Specialisation {
     pub light_kinds: bool,
     /// WGSL `TEXTURES`: some triangle is textured.
     pub textures: bool,
+    /// WGSL `EXACT_MATH` and `INEXACT_DRIVER`: how the kernel divides and takes square
+    /// roots. The CPU tracers ignore it: they divide as IEEE 754 does.
+    pub math: MathMode,
+}
+
+/// How the kernel divides and takes square roots (`shaders/exact.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Math {
+    /// Correctly rounded, whatever the driver: the GPU image is the mirror's in every bit
+    /// on every conformant Vulkan driver that takes glint's SPIR-V. The kernel runs the
+    /// corrections of `shaders/exact.wgsl` (WGSL `EXACT_MATH` on), except on a driver whose
+    /// own `/` and `sqrt` are correctly rounded already ([`crate::gpu::rounds_correctly`]:
+    /// lavapipe), where they would cost time and change no bit.
+    #[default]
+    Exact,
+    /// The corrections always, even on a driver that rounds correctly: the same bits as
+    /// [`Math::Exact`]; for the tests and for measuring what the corrections cost.
+    Corrected,
+    /// The driver's own `/` and `sqrt`: within Vulkan's 2.5 and 3 ULP, not always the
+    /// mirror's bits (WGSL `EXACT_MATH` off).
+    Fast,
+}
+
+impl std::fmt::Display for Math {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Math {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Math, String> {
+        match s {
+            "exact" => Ok(Math::Exact),
+            "corrected" => Ok(Math::Corrected),
+            "fast" => Ok(Math::Fast),
+            _ => Err(format!(
+                "unknown math {s:?}: expected exact, corrected or fast"
+            )),
+        }
+    }
+}
+
+impl Math {
+    /// "exact" or "fast", as the command line spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Math::Exact => "exact",
+            Math::Corrected => "corrected",
+            Math::Fast => "fast",
+        }
+    }
+}
+
+/// The kernel's arithmetic mode: [`Math`], and whether the driver's first approximations
+/// are made deliberately inexact (a test of the exact path on an exact driver).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct MathMode {
+    /// Exact or fast division and square root.
+    pub math: Math,
+    /// WGSL `INEXACT_DRIVER`: the shader's raw `/` and `sqrt` are moved by up to ±2 ULP,
+    /// differently from operation to operation and pixel to pixel, as a driver with
+    /// Vulkan's 2.5-ULP allowance may round (`glint compare --inexact-driver`).
+    pub inexact_driver: bool,
+}
+
+impl MathMode {
+    /// What the kernel compiles on a driver that does (`native`) or does not round `/`
+    /// and `sqrt` correctly: [`Math::Exact`] needs no corrections on the first, unless the
+    /// driver is made inexact on purpose.
+    pub fn on_driver(self, native: bool) -> MathMode {
+        if native && self.math == Math::Exact && !self.inexact_driver {
+            MathMode {
+                math: Math::Fast,
+                inexact_driver: false,
+            }
+        } else {
+            self
+        }
+    }
 }
 
 /// Scenes with at most this many primitives are traced by testing every primitive: a
@@ -409,6 +489,7 @@ impl Specialisation {
                     .any(|m| m.kr.iter().chain(&m.kt).any(|&k| k > 0.0)),
             light_kinds: buf.lights.iter().any(|l| l.kind != LIGHT_POINT),
             textures: !buf.uvs.is_empty(),
+            math: MathMode::default(),
         }
     }
 
@@ -430,6 +511,7 @@ impl Specialisation {
             whitted: true,
             light_kinds: true,
             textures: true,
+            math: MathMode::default(),
         }
     }
 
@@ -438,8 +520,13 @@ impl Specialisation {
         Specialisation { use_bvh, ..self }
     }
 
+    /// The same pipeline with the kernel's arithmetic `math`.
+    pub fn with_math(self, math: MathMode) -> Self {
+        Specialisation { math, ..self }
+    }
+
     /// The `(name, value)` pairs for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 12] {
+    pub fn constants(&self) -> [(&'static str, f64); 14] {
         let b = |x: bool| if x { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -454,6 +541,8 @@ impl Specialisation {
             ("WHITTED", b(self.whitted)),
             ("LIGHT_KINDS", b(self.light_kinds)),
             ("TEXTURES", b(self.textures)),
+            ("EXACT_MATH", b(self.math.math != Math::Fast)),
+            ("INEXACT_DRIVER", b(self.math.inexact_driver)),
         ]
     }
 }

@@ -25,7 +25,53 @@ pub struct Diff {
     pub max_u8: u8,
 }
 
+/// When two images count as equal (`glint compare` and `glint diff --tolerance`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tolerance {
+    /// Every f32 bit of every colour, every hit/miss and every bit of every hit's t.
+    Bits,
+    /// The same 8-bit colour (what a PNG holds) and the same hit/miss.
+    EightBit,
+    /// No channel differs by more than this (linear units), and the same hit/miss.
+    Abs(f64),
+}
+
+impl std::str::FromStr for Tolerance {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "bits" => Ok(Tolerance::Bits),
+            "8bit" => Ok(Tolerance::EightBit),
+            _ => match s.parse::<f64>() {
+                Ok(x) if x.is_finite() && x >= 0.0 => Ok(Tolerance::Abs(x)),
+                _ => Err(format!(
+                    "{s:?}: expected bits, 8bit or a finite number >= 0 (the largest channel difference allowed)"
+                )),
+            },
+        }
+    }
+}
+
+impl std::fmt::Display for Tolerance {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Tolerance::Bits => f.write_str("every bit (colour, hit/miss, t)"),
+            Tolerance::EightBit => f.write_str("8-bit colour and hit/miss"),
+            Tolerance::Abs(x) => write!(f, "channels within {x:e} and hit/miss"),
+        }
+    }
+}
+
 impl Diff {
+    /// Whether the two images are equal by `tolerance`'s criterion.
+    pub fn within(&self, tolerance: Tolerance) -> bool {
+        match tolerance {
+            Tolerance::Bits => self.bit_exact(),
+            Tolerance::EightBit => self.differing_pixels == 0 && self.hit_miss == 0,
+            Tolerance::Abs(x) => self.max_abs <= x && self.hit_miss == 0,
+        }
+    }
+
     /// Whether the two images are the same in every f32 bit of every colour, in every
     /// hit/miss and in every bit of every hit distance: what lavapipe must give.
     pub fn bit_exact(&self) -> bool {

@@ -29,14 +29,29 @@ fn main() {
         glint::cache::remove_pending_temps();
         std::process::exit(130);
     });
-    let result = run(Cli::parse());
-    if let Err(e) = result {
-        eprintln!("error: {e:#}");
-        std::process::exit(1);
+    let cli = Cli::parse();
+    // compare and diff keep 1 for "different": their errors exit 3 (usage errors: clap's 2).
+    let verdict = matches!(cli.command, Command::Compare { .. } | Command::Diff { .. });
+    match run(cli) {
+        Ok(Verdict::Equal) => {}
+        Ok(Verdict::Different) => std::process::exit(1),
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::exit(if verdict { 3 } else { 1 });
+        }
     }
 }
 
-fn run(cli: Cli) -> Result<()> {
+/// What a command found: compare and diff may find their images different.
+enum Verdict {
+    /// Success, or equal images.
+    Equal,
+    /// The images differ by the command's criterion (exit status 1).
+    Different,
+}
+
+fn run(cli: Cli) -> Result<Verdict> {
+    let done = |r: Result<()>| r.map(|()| Verdict::Equal);
     match cli.command {
         Command::Render {
             scene,
@@ -46,7 +61,7 @@ fn run(cli: Cli) -> Result<()> {
             no_cache,
             frame,
             common,
-        } => render(
+        } => done(render(
             &scene,
             &output,
             verbose,
@@ -54,15 +69,21 @@ fn run(cli: Cli) -> Result<()> {
             no_cache,
             frame,
             common,
-        ),
+        )),
         Command::Compare {
             scene,
             frame,
             common,
             diff,
-        } => compare(&scene, frame, common, &diff),
-        Command::Diff { a, b, diff } => diff_images(&a, &b, &diff),
-        Command::Adapters => adapters(),
+            tolerance,
+        } => compare(&scene, frame, common, &diff, tolerance),
+        Command::Diff {
+            a,
+            b,
+            diff,
+            tolerance,
+        } => diff_images(&a, &b, &diff, tolerance),
+        Command::Adapters => done(adapters()),
         Command::View {
             scene,
             backend,
@@ -70,21 +91,23 @@ fn run(cli: Cli) -> Result<()> {
             samples,
             frames,
             screenshot,
+            math,
             common,
-        } => cli::view::run(cli::view::Options {
+        } => done(cli::view::run(cli::view::Options {
             scene,
             backend: backend.into(),
             size,
             samples,
             frames,
             screenshot,
+            math: math.into(),
             adapter: common.adapter,
             load: glint::scene::LoadOptions {
                 max_input_bytes: max_input_bytes(),
                 confine: common.confine,
                 cache: None,
             },
-        }),
+        })),
         Command::Bench {
             scenes,
             size,
@@ -95,6 +118,7 @@ fn run(cli: Cli) -> Result<()> {
             triangle,
             samples,
             max_depth,
+            math,
         } => {
             let options = glint::bench::Options {
                 size: Some(size),
@@ -106,8 +130,16 @@ fn run(cli: Cli) -> Result<()> {
                     glint::bench::Options::default().backends
                 },
                 gpu: gpu_options(common.adapter.as_deref()),
+                math: math.into(),
             };
-            bench(scenes, samples, max_depth, &options, common.confine, &out)
+            done(bench(
+                scenes,
+                samples,
+                max_depth,
+                &options,
+                common.confine,
+                &out,
+            ))
         }
     }
 }
@@ -140,6 +172,8 @@ fn options(frame: FrameArgs) -> RenderOptions {
         triangle: frame.triangle,
         samples: frame.samples,
         max_depth: frame.max_depth,
+        math: frame.math.into(),
+        inexact_driver: frame.inexact_driver,
     }
 }
 
@@ -188,7 +222,13 @@ fn render(
     Ok(())
 }
 
-fn compare(scene: &Path, frame: FrameArgs, common: CommonArgs, diff: &Path) -> Result<()> {
+fn compare(
+    scene: &Path,
+    frame: FrameArgs,
+    common: CommonArgs,
+    diff: &Path,
+    tolerance: glint::compare::Tolerance,
+) -> Result<Verdict> {
     glint::image::check_extension(diff)?;
     let s = load(scene, common.confine, None)?;
     let gpu = glint::gpu::Gpu::with_options(&gpu_options(common.adapter.as_deref()))?;
@@ -202,17 +242,35 @@ fn compare(scene: &Path, frame: FrameArgs, common: CommonArgs, diff: &Path) -> R
         .save(diff)
         .with_context(|| "writing the difference image")?;
     println!("difference image: {}", diff.display());
-    Ok(())
+    Ok(verdict(report.gpu_vs_cpu.within(tolerance), tolerance))
 }
 
-fn diff_images(a: &Path, b: &Path, diff: &Path) -> Result<()> {
+/// The verdict line (equal by `tolerance`, or not) and the exit status it means.
+fn verdict(equal: bool, tolerance: glint::compare::Tolerance) -> Verdict {
+    println!(
+        "equal by {tolerance}: {}",
+        if equal { "yes" } else { "NO (exit status 1)" }
+    );
+    if equal {
+        Verdict::Equal
+    } else {
+        Verdict::Different
+    }
+}
+
+fn diff_images(
+    a: &Path,
+    b: &Path,
+    diff: &Path,
+    tolerance: glint::compare::Tolerance,
+) -> Result<Verdict> {
     glint::image::check_extension(diff)?;
     let (x, y) = (
         glint::image::Image::load_limited(a, max_input_bytes())?,
         glint::image::Image::load_limited(b, max_input_bytes())?,
     );
     if (x.width, x.height) != (y.width, y.height) {
-        bail!(
+        println!(
             "the images differ in size: {} is {}x{}, {} is {}x{}",
             a.display(),
             x.width,
@@ -221,6 +279,7 @@ fn diff_images(a: &Path, b: &Path, diff: &Path) -> Result<()> {
             y.width,
             y.height
         );
+        return Ok(verdict(false, tolerance));
     }
     let d = glint::compare::diff(&x, &y);
     let exr = |p: &Path| glint::image::format_of(p).ok() == Some(glint::image::Format::Exr);
@@ -249,7 +308,7 @@ fn diff_images(a: &Path, b: &Path, diff: &Path) -> Result<()> {
     }
     glint::compare::diff_image(&x, &y).save(diff)?;
     println!("difference image: {}", diff.display());
-    Ok(())
+    Ok(verdict(d.within(tolerance), tolerance))
 }
 
 fn adapters() -> Result<()> {

@@ -46,6 +46,7 @@ fn specialisations() -> [Specialisation; 2] {
         whitted: true,
         light_kinds: true,
         textures: true,
+        math: Default::default(),
     };
     let lean = Specialisation {
         has_triangles: false,
@@ -220,5 +221,5 @@ fn subnormal_shading_terms_are_flushed_and_every_tracer_agrees() {
     let Some(gpu) = common::gpu() else { return };
     let g = common::render_gpu(gpu, &buf, spec);
     assert_eq!(subnormals(&g), 0, "the GPU keeps subnormal channels");
-    common::check_agreement(&g, &c, common::is_lavapipe(gpu)).unwrap();
+    common::check_agreement(&g, &c, common::bit_exact_expected(gpu)).unwrap();
 }

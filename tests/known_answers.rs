@@ -163,7 +163,7 @@ fn phong_exponent_zero_is_one() {
     }
     if let Some(gpu) = common::gpu() {
         let g = common::render_gpu(gpu, &buf, spec);
-        common::check_agreement(&g, &img, common::is_lavapipe(gpu)).unwrap();
+        common::check_agreement(&g, &img, common::bit_exact_expected(gpu)).unwrap();
     }
 }
 

@@ -37,7 +37,7 @@ fn frame_of_8192_squared_renders_in_tiles() {
         buf: &buf,
         spec,
     };
-    let lavapipe = common::is_lavapipe(gpu);
+    let lavapipe = common::bit_exact_expected(gpu);
     let mut checked = 0;
     let mut rows_to_check: Vec<u32> = vec![0, 8191];
     for k in 1..8192u32.div_ceil(rows) {

@@ -142,8 +142,12 @@ fn gpu_packet_and_mirror_agree_on_new_lights() {
             "{algo}: packets against the mirror"
         );
         if let Some(gpu) = gpu {
-            check_agreement(&render_gpu(gpu, &buf, spec), &c, common::is_lavapipe(gpu))
-                .unwrap_or_else(|e| panic!("{algo}: {e}"));
+            check_agreement(
+                &render_gpu(gpu, &buf, spec),
+                &c,
+                common::bit_exact_expected(gpu),
+            )
+            .unwrap_or_else(|e| panic!("{algo}: {e}"));
         }
     }
     // The twin: the same scene with its spot made a point light differs.

@@ -45,7 +45,7 @@ fn refinement_converges_to_the_render() {
         let mut live = Live::new(scene, 96, 72);
         live.step(&r).unwrap();
         assert!(live.converged());
-        check_agreement(live.image(), &want, common::is_lavapipe(gpu)).unwrap();
+        check_agreement(live.image(), &want, common::bit_exact_expected(gpu)).unwrap();
     }
 }
 
@@ -195,7 +195,7 @@ fn frames_traced_into_a_texture_are_the_renders() {
         };
         assert!(live.step_to_texture(&renderer, &texture).unwrap());
         let first = read_texture(gpu, &texture);
-        let lavapipe = common::is_lavapipe(g);
+        let lavapipe = common::bit_exact_expected(g);
         let same = |a: &[u32], b: &[u32]| {
             let off = a.iter().zip(b).filter(|(x, y)| x != y).count();
             if lavapipe {

@@ -178,7 +178,7 @@ color = [0.3, 0.3, 0.4]
         );
         let Some(gpu) = common::gpu() else { continue };
         let g = render_gpu(gpu, &buf, spec);
-        let d = check_agreement(&g, &cpu, common::is_lavapipe(gpu))
+        let d = check_agreement(&g, &cpu, common::bit_exact_expected(gpu))
             .unwrap_or_else(|e| panic!("{algo}: {e}"));
         eprintln!(
             "suzanne + teapot + sphere, shadows, {algo}: GPU vs CPU {} differing pixels, {} hit/miss",

@@ -79,7 +79,7 @@ fn gpu_arithmetic_matches_rust_bit_for_bit() {
         }
     }
     let msg = format!("{bad} of {} values differ; first: {first:?}", n * 16);
-    if common::is_lavapipe(gpu) {
+    if common::bit_exact_expected(gpu) {
         assert_eq!(bad, 0, "{msg}");
     } else {
         eprintln!("adapter {}: {msg} (reported only)", gpu.describe());

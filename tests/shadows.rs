@@ -280,7 +280,12 @@ material = "m"
         }
         assert_eq!(self_shadowed(&dark), top_pixels);
         if let Some(gpu) = common::gpu() {
-            check_agreement(&render_gpu(gpu, &b1, s1), &a, common::is_lavapipe(gpu)).unwrap();
+            check_agreement(
+                &render_gpu(gpu, &b1, s1),
+                &a,
+                common::bit_exact_expected(gpu),
+            )
+            .unwrap();
         }
     }
 }
@@ -297,7 +302,7 @@ fn shadow_scenes_agree_gpu_cpu() {
             let g = render_gpu(gpu, &buf, spec);
             let c = glint::cpu::render_f32(&buf, spec);
             assert!(!g.is_blank());
-            check_agreement(&g, &c, common::is_lavapipe(gpu))
+            check_agreement(&g, &c, common::bit_exact_expected(gpu))
                 .unwrap_or_else(|e| panic!("{name}/{algo}: {e}"));
         }
     }

@@ -54,7 +54,7 @@ fn bvh_and_brute_force_differ(src: &str, algo: TriangleAlgorithm) -> usize {
     let b = glint::cpu::render_f32(&buf, spec.with_bvh(false));
     if let Some(gpu) = common::gpu() {
         let g = common::render_gpu(gpu, &buf, spec.with_bvh(true));
-        common::check_agreement(&g, &a, common::is_lavapipe(gpu)).unwrap();
+        common::check_agreement(&g, &a, common::bit_exact_expected(gpu)).unwrap();
     }
     let d = glint::compare::diff(&a, &b);
     d.differing_bits.max(d.hit_miss).max(d.differing_t)

@@ -94,7 +94,7 @@ fn suzanne() -> String {
 #[test]
 fn gpu_equals_cpu_with_smooth_and_samples() {
     let Some(gpu) = common::gpu() else { return };
-    let lavapipe = common::is_lavapipe(gpu);
+    let lavapipe = common::bit_exact_expected(gpu);
     let dir = temp_dir("agree");
     let meshes = [
         ("ico2", glint::oracle::icosphere_obj(2), ""),
@@ -584,7 +584,7 @@ fn hanikas_point_removes_most_of_the_shadow_terminator() {
 #[test]
 fn many_samples_still_tile_and_report_progress() {
     let Some(gpu) = common::gpu() else { return };
-    let lavapipe = common::is_lavapipe(gpu);
+    let lavapipe = common::bit_exact_expected(gpu);
     let mut scene = seed_scene("sphere");
     scene.camera.samples = 16;
     let (buf, spec) = common::buffers(&scene, 128, 160, scene.triangle);

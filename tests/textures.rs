@@ -111,7 +111,12 @@ fn a_textured_quad_shows_its_texture_upright_at_the_texel_centres() {
     if let Some(gpu) = common::gpu() {
         let (buf, spec) = buffers(&scene, 4, 2, scene.triangle);
         assert!(spec.textures);
-        check_agreement(&render_gpu(gpu, &buf, spec), &c, common::is_lavapipe(gpu)).unwrap();
+        check_agreement(
+            &render_gpu(gpu, &buf, spec),
+            &c,
+            common::bit_exact_expected(gpu),
+        )
+        .unwrap();
     }
     let upside_down = [TEX[1], TEX[0]];
     assert!(shows(&c, &upside_down).is_err(), "the twin: flipped rows");
@@ -370,7 +375,7 @@ fn the_same_textured_mesh_in_every_format_renders_the_same() {
         check_agreement(
             &render_gpu(gpu, &buf, spec),
             &glint::cpu::render_f32(&buf, spec),
-            common::is_lavapipe(gpu),
+            common::bit_exact_expected(gpu),
         )
         .unwrap_or_else(|e| panic!("c.glb: {e}"));
     }
@@ -396,8 +401,12 @@ fn gpu_packet_and_mirror_agree_on_textures() {
         let m = glint::cpu::render_f32_mirror(&buf, spec);
         assert!(glint::compare::diff(&c, &m).bit_exact(), "{algo}");
         if let Some(gpu) = gpu {
-            check_agreement(&render_gpu(gpu, &buf, spec), &c, common::is_lavapipe(gpu))
-                .unwrap_or_else(|e| panic!("{algo}: {e}"));
+            check_agreement(
+                &render_gpu(gpu, &buf, spec),
+                &c,
+                common::bit_exact_expected(gpu),
+            )
+            .unwrap_or_else(|e| panic!("{algo}: {e}"));
         }
     }
     let plain = Scene::parse(

@@ -32,7 +32,7 @@ fn vertex_grid_gpu_equals_cpu() {
             );
             if let Some(gpu) = gpu {
                 let g = render_gpu(gpu, &buf, spec);
-                let d = check_agreement(&g, &cpu, common::is_lavapipe(gpu))
+                let d = check_agreement(&g, &cpu, common::bit_exact_expected(gpu))
                     .unwrap_or_else(|e| panic!("{algo} at {eye:?}: {e}"));
                 eprintln!("{algo} at {eye:?}: {d:?}");
             }

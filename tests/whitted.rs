@@ -63,7 +63,7 @@ fn hall_of_mirrors_sums_exactly() {
         );
         if let Some(gpu) = common::gpu() {
             let g = render_gpu(gpu, &buf, spec);
-            check_agreement(&g, &c, common::is_lavapipe(gpu))
+            check_agreement(&g, &c, common::bit_exact_expected(gpu))
                 .unwrap_or_else(|e| panic!("max_depth {d}: {e}"));
         }
     }
@@ -402,7 +402,12 @@ fn rays_starting_inside_glass_leave_it() {
         );
     }
     if let Some(gpu) = common::gpu() {
-        check_agreement(&render_gpu(gpu, &buf, spec), &c, common::is_lavapipe(gpu)).unwrap();
+        check_agreement(
+            &render_gpu(gpu, &buf, spec),
+            &c,
+            common::bit_exact_expected(gpu),
+        )
+        .unwrap();
     }
     let dark = f32_and_f64(&scene(0.0), 16, 16).0;
     assert!(dark.pixels.iter().all(|p| p[..3] == [0.0, 0.0, 0.0]));
@@ -446,7 +451,7 @@ fn total_internal_reflection_sends_everything_back() {
 #[test]
 fn whitted_scenes_gpu_equals_cpu() {
     let Some(gpu) = common::gpu() else { return };
-    let lavapipe = common::is_lavapipe(gpu);
+    let lavapipe = common::bit_exact_expected(gpu);
     let coplanar = parse(
         "ambient = [0.2, 0.2, 0.2]\nbackground = [0.3, 0.5, 0.8]\nshadows = true\n\
          [camera]\neye = [0.0, 0.05, 6.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 50.0\nwidth = 64\nheight = 48\n\

@@ -76,6 +76,7 @@ def render(
     triangle: Optional[str] = None,
     max_depth: Optional[int] = None,
     adapter: Optional[str] = None,
+    math: str = "exact",
 ) -> np.ndarray:
     """Renders ``scene`` and returns float32 of shape (height, width, 4).
 
@@ -84,12 +85,20 @@ def render(
 
     ``scene`` is a path (str or os.PathLike), a ``glint.Scene`` or a dict with the scene
     file's keys. ``backend`` is one of ``glint.backends()``; ``size=(width, height)``,
-    ``samples``, ``triangle`` and ``max_depth`` override the scene's. Raises
+    ``samples``, ``triangle`` and ``max_depth`` override the scene's; ``adapter`` picks a
+    Vulkan adapter by name; ``math`` is the GPU kernel's division and square root
+    (``"exact"``: correctly rounded on every driver, the default; ``"corrected"``;
+    ``"fast"``: the driver's own). Raises
     ``glint.SceneError`` for a bad scene, ``OSError`` for a file that cannot be read,
     ``glint.RenderError`` when the render fails, ``KeyboardInterrupt`` on Ctrl-C.
     """
     return renderer(backend, adapter).render(
-        scene, size=size, samples=samples, triangle=triangle, max_depth=max_depth
+        scene,
+        size=size,
+        samples=samples,
+        triangle=triangle,
+        max_depth=max_depth,
+        math=math,
     )
 
 
@@ -100,6 +109,7 @@ def compare(
     samples: Optional[int] = None,
     triangle: Optional[str] = None,
     max_depth: Optional[int] = None,
+    math: str = "exact",
 ) -> Dict[str, Any]:
     """``glint compare``: the GPU's image against its CPU mirror and both against f64.
 
@@ -107,7 +117,8 @@ def compare(
     ``gpu_vs_f64`` (each with ``bit_exact``, ``differing_bits``, ``hit_miss``,
     ``differing_t``, ``max_abs``, ``rms``, ``mean_abs``, ``max_u8``), ``adapter``,
     ``exactness``, ``traversal``, ``algorithm``, ``width``, ``height``, ``warnings`` and
-    ``ray_query``. Needs a Vulkan adapter (lavapipe will do).
+    ``ray_query``. ``math`` as in ``render``; with ``"exact"`` the GPU's image is the
+    mirror's in every bit. Needs a Vulkan adapter (lavapipe will do).
     """
     return compare_on(
         renderer("gpu", adapter),
@@ -116,4 +127,5 @@ def compare(
         samples=samples,
         triangle=triangle,
         max_depth=max_depth,
+        math=math,
     )

@@ -30,6 +30,7 @@ def render(
     triangle: Optional[str] = None,
     max_depth: Optional[int] = None,
     adapter: Optional[str] = None,
+    math: str = "exact",
 ) -> npt.NDArray[np.float32]:
     """Renders a scene: float32 (height, width, 4), RGB and the hit distance t."""
 
@@ -40,5 +41,6 @@ def compare(
     samples: Optional[int] = None,
     triangle: Optional[str] = None,
     max_depth: Optional[int] = None,
+    math: str = "exact",
 ) -> Dict[str, Any]:
     """glint compare's metrics as a dict."""

@@ -62,6 +62,7 @@ class Renderer:
         samples: Optional[int] = None,
         triangle: Optional[str] = None,
         max_depth: Optional[int] = None,
+        math: str = "exact",
     ) -> npt.NDArray[np.float32]:
         """Renders a scene: float32 (height, width, 4), RGB and the hit distance t."""
     @property
@@ -81,6 +82,7 @@ def compare_on(
     samples: Optional[int] = None,
     triangle: Optional[str] = None,
     max_depth: Optional[int] = None,
+    math: str = "exact",
 ) -> Dict[str, Any]:
     """``glint compare`` on a GPU renderer's device."""
 

@@ -25,7 +25,7 @@ use scene::{Scene, scene_arg};
 /// `differing_t`, `max_abs`, `rms`, `mean_abs`, `max_u8`, ...), `adapter`, `exactness`,
 /// `traversal`, `algorithm`, `width`, `height`, `warnings`, `ray_query`.
 #[pyfunction]
-#[pyo3(signature = (renderer, scene, *, size=None, samples=None, triangle=None, max_depth=None))]
+#[pyo3(signature = (renderer, scene, *, size=None, samples=None, triangle=None, max_depth=None, math="exact"))]
 fn compare_on<'py>(
     py: Python<'py>,
     renderer: &Renderer,
@@ -34,9 +34,10 @@ fn compare_on<'py>(
     samples: Option<u32>,
     triangle: Option<&str>,
     max_depth: Option<u32>,
+    math: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let scene = scene_arg(py, scene)?;
-    let options = render::options(size, samples, triangle, max_depth)?;
+    let options = render::options(size, samples, triangle, max_depth, math)?;
     let gpu = match renderer.inner.tracer() {
         glint::Tracer::Gpu(g) | glint::Tracer::GpuRq(g) => g,
         _ => {

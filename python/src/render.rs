@@ -47,9 +47,11 @@ impl Renderer {
     /// (-1 for a miss). Exactly what `glint render -o x.exr` writes, in every bit.
     ///
     /// `size=(width, height)`, `samples` (N×N per pixel), `triangle` (`moller-trumbore`,
-    /// `watertight`, `baldwin-weber`) and `max_depth` override the scene's. Ctrl-C stops
-    /// the render (KeyboardInterrupt).
-    #[pyo3(signature = (scene, *, size=None, samples=None, triangle=None, max_depth=None))]
+    /// `watertight`, `baldwin-weber`) and `max_depth` override the scene's. `math` is the
+    /// GPU kernel's division and square root: `exact` (correctly rounded on every driver,
+    /// the default), `corrected` (the corrections even where the driver is exact) or
+    /// `fast` (the driver's own). Ctrl-C stops the render (KeyboardInterrupt).
+    #[pyo3(signature = (scene, *, size=None, samples=None, triangle=None, max_depth=None, math="exact"))]
     fn render<'py>(
         &self,
         py: Python<'py>,
@@ -58,9 +60,10 @@ impl Renderer {
         samples: Option<u32>,
         triangle: Option<&str>,
         max_depth: Option<u32>,
+        math: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
         let scene = scene_arg(py, scene)?;
-        let options = options(size, samples, triangle, max_depth)?;
+        let options = options(size, samples, triangle, max_depth, math)?;
         render_array(py, &self.inner, scene.get(), options)
     }
 
@@ -93,7 +96,11 @@ pub(crate) fn options(
     samples: Option<u32>,
     triangle: Option<&str>,
     max_depth: Option<u32>,
+    math: &str,
 ) -> PyResult<glint::RenderOptions> {
+    let math = math
+        .parse::<glint::buffers::Math>()
+        .map_err(PyValueError::new_err)?;
     let triangle = triangle
         .map(|t| t.parse::<glint::scene::TriangleAlgorithm>())
         .transpose()
@@ -103,6 +110,8 @@ pub(crate) fn options(
         triangle,
         samples,
         max_depth,
+        math,
+        ..glint::RenderOptions::default()
     })
 }
 

@@ -144,6 +144,15 @@ def test_compare_reports_the_clis_metrics(lavapipe_expected):
     assert c["cpu_vs_f64"]["differing_bits"] > 0
 
 
+def test_compare_with_the_corrections_is_bit_exact(lavapipe_expected):
+    c = glint.compare(SCENES / "whitted.toml", adapter=os.environ.get("GLINT_ADAPTER"),
+                      size=(48, 36), math="corrected")
+    if lavapipe_expected:
+        assert c["gpu_vs_cpu"]["bit_exact"] is True
+    with pytest.raises(ValueError, match="unknown math"):
+        glint.render(SCENES / "bb8.toml", backend="cpu", math="approximate")
+
+
 def test_compare_needs_a_gpu_renderer():
     with pytest.raises(ValueError, match="GPU renderer"):
         glint.compare_on(glint.Renderer("cpu"), SCENES / "bb8.toml")

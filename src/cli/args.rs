@@ -75,6 +75,37 @@ pub struct FrameArgs {
     /// `max_depth`; 0: local shading only).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=glint::scene::MAX_DEPTH as i64))]
     pub max_depth: Option<u32>,
+    /// The GPU kernel's division and square root: exact (correctly rounded on every
+    /// Vulkan driver: the GPU image is the CPU mirror's) or fast (the driver's own).
+    #[arg(long, value_enum, default_value = "exact")]
+    pub math: MathArg,
+    /// Make the GPU driver's `/` and `sqrt` deliberately inexact (up to ±2 ULP, varying
+    /// from operation to operation and pixel to pixel): with --math exact the image must
+    /// not change; a proof of exactness on a driver that is exact already (lavapipe).
+    #[arg(long)]
+    pub inexact_driver: bool,
+}
+
+/// `--math`: glint's [`glint::buffers::Math`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MathArg {
+    /// Correctly rounded division and square root on every driver (the driver's own
+    /// where they are correctly rounded already: lavapipe).
+    Exact,
+    /// The corrections even where the driver rounds correctly (the same bits; their cost).
+    Corrected,
+    /// The driver's own division and square root.
+    Fast,
+}
+
+impl From<MathArg> for glint::buffers::Math {
+    fn from(m: MathArg) -> Self {
+        match m {
+            MathArg::Exact => glint::buffers::Math::Exact,
+            MathArg::Corrected => glint::buffers::Math::Corrected,
+            MathArg::Fast => glint::buffers::Math::Fast,
+        }
+    }
 }
 
 /// The subcommands.
@@ -102,7 +133,8 @@ pub enum Command {
         #[command(flatten)]
         common: CommonArgs,
     },
-    /// Render a scene on the GPU and on the CPU mirror and measure the difference.
+    /// Render a scene on the GPU and on the CPU mirror and measure the difference. Exit
+    /// status: 0 equal (by --tolerance), 1 different, 2 a usage error, 3 any other error.
     Compare {
         /// The scene file (TOML).
         scene: PathBuf,
@@ -113,6 +145,11 @@ pub enum Command {
         /// Where to write the difference image.
         #[arg(long, default_value = "diff.png")]
         diff: PathBuf,
+        /// When the GPU's image counts as the mirror's: bits (every f32 bit, hit/miss and
+        /// t), 8bit (the PNG's colour and hit/miss) or a number (the largest channel
+        /// difference allowed). Exit status 0 when equal, 1 when not.
+        #[arg(long, default_value = "bits")]
+        tolerance: glint::compare::Tolerance,
     },
     /// Open a window on a scene: orbit (left button), pan (right), zoom (wheel), fly
     /// (W A S D Q E), reset (R); the picture refines while the camera is still and reloads
@@ -136,6 +173,9 @@ pub enum Command {
         /// With --frames: write the last frame presented to this PNG.
         #[arg(long, requires = "frames")]
         screenshot: Option<PathBuf>,
+        /// The GPU kernel's division and square root (see `render --math`).
+        #[arg(long, value_enum, default_value = "exact")]
+        math: MathArg,
         #[command(flatten)]
         common: CommonArgs,
     },
@@ -151,6 +191,11 @@ pub enum Command {
         /// Where to write the difference image (PNG).
         #[arg(long, default_value = "diff.png")]
         diff: PathBuf,
+        /// When the two count as equal: bits (every f32 bit; between two EXRs also
+        /// hit/miss and t), 8bit (the 8-bit colour) or a number (the largest channel
+        /// difference allowed). Exit status 0 when equal, 1 when not.
+        #[arg(long, default_value = "bits")]
+        tolerance: glint::compare::Tolerance,
     },
     /// Speed against error: every scene × tracer × triangle algorithm, with a warm-up and
     /// timed runs; writes report.md, report.json and plot.png to --out.
@@ -178,6 +223,9 @@ pub enum Command {
         /// each scene's own).
         #[arg(long, value_parser = clap::value_parser!(u32).range(0..=glint::scene::MAX_DEPTH as i64))]
         max_depth: Option<u32>,
+        /// The GPU kernel's division and square root (see `render --math`).
+        #[arg(long, value_enum, default_value = "exact")]
+        math: MathArg,
         /// Antialiasing for every scene: N×N samples a pixel (default: each scene's own).
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=glint::scene::MAX_SAMPLES as i64))]
         samples: Option<u32>,

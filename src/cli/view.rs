@@ -38,6 +38,8 @@ pub struct Options {
     pub frames: Option<u32>,
     /// Write the last frame presented here.
     pub screenshot: Option<PathBuf>,
+    /// The GPU kernel's division and square root.
+    pub math: glint::buffers::Math,
     /// The adapter, by part of its name.
     pub adapter: Option<String>,
     /// How the scene is read.
@@ -99,6 +101,10 @@ pub fn run(opts: Options) -> Result<()> {
         reload_at: None,
         saved: 0,
     };
+    app.live.set_math(glint::buffers::MathMode {
+        math: app.opts.math,
+        inexact_driver: false,
+    });
     app.watch.follow(&app.live.scene().inputs);
     event_loop
         .run_app(&mut app)

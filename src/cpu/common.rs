@@ -1,4 +1,4 @@
-//! The CPU mirror of `shaders/common.wgsl`, the first of the kernel's five parts: the
+//! The CPU mirror of `shaders/common.wgsl`, the second of the kernel's six parts (after `exact.wgsl`): the
 //! ray and hit records, the shader's module-scope globals (`params`, the buffers, the
 //! override constants) as the fields of [`Globals`], and the small helpers.
 //!

@@ -2,6 +2,7 @@
 //! one generic `trace.rs`, rows in parallel with rayon.
 
 pub mod common;
+pub mod exact;
 pub mod packet;
 pub mod prims;
 pub mod texture;

@@ -11,6 +11,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::common::{Globals, Hit, Ray, in_interval, max0, sign_nonneg};
+use super::exact::product_error;
 use crate::buffers::{
     FLAT, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE, TRIANGLE_WATERTIGHT,
     Triangle,
@@ -206,18 +207,6 @@ pub fn make_shear<R: Real>(dir: V3<R>) -> Shear<R> {
         sy: dir.get(ky) * sz,
         sz,
     }
-}
-
-/// WGSL `product_error`: Dekker's exact rounding error of the product `a * b == p`.
-#[inline]
-pub fn product_error<R: Real>(a: R, b: R, p: R) -> R {
-    let ca = R::SPLITTER * a;
-    let a_hi = ca - (ca - a);
-    let a_lo = a - a_hi;
-    let cb = R::SPLITTER * b;
-    let b_hi = cb - (cb - b);
-    let b_lo = b - b_hi;
-    ((a_hi * b_hi - p) + a_hi * b_lo + a_lo * b_hi) + a_lo * b_lo
 }
 
 /// WGSL `edge_function`: x1·y2 − y1·x2 with an exact sign (a returned 0 is an exact 0).

@@ -344,10 +344,13 @@ pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: 
 
 // ---- shading -----------------------------------------------------------------------------
 
-/// WGSL `phong_power`: `base^n`, by squaring for an integer exponent, else `pow`; 0 where
-/// the power is subnormal.
+/// WGSL `phong_power`: `base^n`, by squaring for an integer exponent, else `pow_det` (in
+/// f64, the reference, libm's `pow`); 0 where the power is subnormal.
 pub fn phong_power<R: Real>(base: R, m: &Material) -> R {
     if m.n_int < 0 {
+        if R::MIRROR {
+            return flush(R::from_f32(super::exact::pow_det(base.to_f32(), m.n)));
+        }
         return flush(base.powf(R::from_f32(m.n)));
     }
     let mut result = R::ONE;

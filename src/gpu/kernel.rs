@@ -80,6 +80,9 @@ pub struct Kernel {
     /// exact path's binding map ([`super::exact::binding_map`]).
     bindings: [Vec<u32>; 3],
     pipelines: Mutex<HashMap<(Specialisation, Entry), wgpu::ComputePipeline>>,
+    /// The device's `/` and `sqrt` are correctly rounded ([`super::rounds_correctly`]):
+    /// [`crate::buffers::Math::Exact`] compiles no corrections here.
+    native_rounding: bool,
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -259,6 +262,12 @@ impl Kernel {
         self.flavour == Flavour::RayQuery
     }
 
+    /// Whether [`crate::buffers::Math::Exact`] runs the device's own `/` and `sqrt` (they
+    /// are correctly rounded: [`super::rounds_correctly`]) rather than the corrections.
+    pub fn native_rounding(&self) -> bool {
+        self.native_rounding
+    }
+
     /// Whether this kernel's arithmetic reaches the driver with every rewrite forbidden.
     pub fn exactness(&self) -> Exactness {
         match self.source {
@@ -345,6 +354,7 @@ impl Kernel {
                 rgba8_layout,
                 query_layout,
                 pipelines: Mutex::new(HashMap::new()),
+                native_rounding: super::rounds_correctly(&device.adapter_info()),
             }
         })
     }
@@ -365,7 +375,9 @@ impl Kernel {
             return Ok((p.clone(), Duration::ZERO));
         }
         let t0 = Instant::now();
-        let constants = spec.constants();
+        let constants = spec
+            .with_math(spec.math.on_driver(self.native_rounding))
+            .constants();
         let (entry_point, k) = match entry {
             Entry::Render => ("render", 0),
             Entry::RenderRgba8 => ("render_rgba8", 1),

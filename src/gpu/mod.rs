@@ -17,9 +17,11 @@ use web_time::Instant;
 pub use kernel::{GpuTimings, Kernel, RENDER_STORAGE_BUFFERS, tile_rows};
 pub use resident::Resident;
 
-/// The WGSL source of the kernel: `shaders/common.wgsl`, `prims.wgsl`, `texture.wgsl`,
-/// `trace.wgsl` and `whitted.wgsl`, joined in that order (WGSL needs no declaration before use).
+/// The WGSL source of the kernel: `shaders/exact.wgsl`, `common.wgsl`, `prims.wgsl`,
+/// `texture.wgsl`, `trace.wgsl` and `whitted.wgsl`, joined in that order (WGSL needs no
+/// declaration before use).
 pub const SHADER_SOURCE: &str = concat!(
+    include_str!("../../shaders/exact.wgsl"),
     include_str!("../../shaders/common.wgsl"),
     include_str!("../../shaders/prims.wgsl"),
     include_str!("../../shaders/texture.wgsl"),
@@ -115,6 +117,18 @@ pub struct Gpu {
     ray_query: OnceLock<Result<Kernel, GpuError>>,
     /// Time to find the adapter and create the device.
     pub start_time: Duration,
+}
+
+/// Whether the adapter's own `/` and `sqrt` are IEEE 754's, correctly rounded, so that
+/// [`crate::buffers::Math::Exact`] needs no corrections there: Mesa's lavapipe, which
+/// compiles them to LLVM's `fdiv` and `sqrt` without fast-math flags (x86's `divps` and
+/// `sqrtps`). Checked on 22.3, 25.0 and 26.1 by `tests/exact_math.rs` (normal operands and
+/// quotients; 26.1 flushes subnormals in compute, which glint's own flush covers:
+/// docs/exactness.md). Every other driver gets the corrections.
+pub fn rounds_correctly(info: &wgpu::AdapterInfo) -> bool {
+    info.device_type == wgpu::DeviceType::Cpu
+        && (info.driver.to_lowercase().contains("llvmpipe")
+            || info.name.to_lowercase().contains("llvmpipe"))
 }
 
 /// Whether shadow rays should go in packets on this adapter (measured 2026-12-02,

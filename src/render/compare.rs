@@ -77,7 +77,7 @@ pub fn compare(
     super::check_memory(w, h, w as u64 * h as u64 * 16 * 4)?;
     let mut buf = SceneBuffers::new(scene, w, h, algo);
     options.apply(&mut buf);
-    let spec = Specialisation::for_scene(&buf);
+    let spec = Specialisation::for_scene(&buf).with_math(options.math_mode());
     let kernel = gpu.compute_kernel(spec)?;
     let (g, _) = kernel.render(&gpu.device, &gpu.queue, &buf, spec, &mut |_, _| {})?;
     let c = crate::cpu::render_f32(&buf, spec);

@@ -303,7 +303,8 @@ impl<'a> Job<'a> {
             run.note(Note::Backend(note.to_string()));
         }
         let mut sink = Sink::open(&output, w, h)?;
-        let traced = trace(renderer, scene, &mut buf, &mut sink, &mut run)?;
+        let math = options.math_mode();
+        let traced = trace(renderer, scene, &mut buf, math, &mut sink, &mut run)?;
         if run.cancelled() {
             return Err(RenderError::Cancelled);
         }
@@ -384,10 +385,11 @@ fn trace(
     renderer: &Renderer,
     scene: &Scene,
     buf: &mut SceneBuffers,
+    math: crate::buffers::MathMode,
     sink: &mut Sink,
     run: &mut Run<'_, '_>,
 ) -> Result<Traced, RenderError> {
-    let spec = Specialisation::for_scene(buf);
+    let spec = Specialisation::for_scene(buf).with_math(math);
     let cpu = |f64: bool, buf: &SceneBuffers, sink: &mut Sink, run: &mut Run<'_, '_>| {
         let frame = cpu_bands(f64.then_some(scene), buf, spec, sink, run)?;
         Ok::<_, RenderError>(Traced {

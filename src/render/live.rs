@@ -77,6 +77,15 @@ impl Live {
         }
     }
 
+    /// Sets the GPU kernel's division and square root for the frames to come.
+    pub fn set_math(&mut self, math: crate::buffers::MathMode) {
+        if self.spec.math != math {
+            self.spec = self.spec.with_math(math);
+            self.resident = None;
+            self.restart();
+        }
+    }
+
     /// The scene as it stands (its camera the current one).
     pub fn scene(&self) -> &Scene {
         &self.scene
@@ -115,7 +124,7 @@ impl Live {
             SceneBuffers::new_reusing(&scene, self.width, self.height, scene.triangle, old);
         self.buf = buf;
         self.resident = None;
-        self.spec = Specialisation::for_scene(&self.buf);
+        self.spec = Specialisation::for_scene(&self.buf).with_math(self.spec.math);
         self.scene = scene;
         self.restart();
         if kept {

@@ -93,6 +93,13 @@ pub struct RenderOptions {
     /// The most reflections plus refractions along a path, clamped to
     /// 0..=[`crate::scene::MAX_DEPTH`] (default: the scene's `max_depth`).
     pub max_depth: Option<u32>,
+    /// The GPU kernel's division and square root (default: exact, correctly rounded on
+    /// every driver); the CPU tracers always divide as IEEE 754 does.
+    pub math: crate::buffers::Math,
+    /// Make the GPU driver's first approximations of `/` and `sqrt` deliberately inexact
+    /// (up to ±2 ULP): with exact math the image must not change (`glint compare
+    /// --inexact-driver`).
+    pub inexact_driver: bool,
 }
 
 impl RenderOptions {
@@ -105,6 +112,14 @@ impl RenderOptions {
             return Err(RenderError::Size(w, h));
         }
         Ok((w, h))
+    }
+
+    /// The kernel's arithmetic these options ask for.
+    pub fn math_mode(&self) -> crate::buffers::MathMode {
+        crate::buffers::MathMode {
+            math: self.math,
+            inexact_driver: self.inexact_driver,
+        }
     }
 
     /// Sets `buf`'s frame values that these options override (samples, depth).

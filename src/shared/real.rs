@@ -23,6 +23,8 @@ pub trait Real:
     + Div<Output = Self>
     + Neg<Output = Self>
 {
+    /// Whether this is the shader's own f32 (the mirror), not the f64 reference.
+    const MIRROR: bool;
     /// 0.
     const ZERO: Self;
     /// 1.
@@ -52,7 +54,8 @@ pub trait Real:
     fn sqrt(self) -> Self;
     /// Absolute value.
     fn abs(self) -> Self;
-    /// `self^e` (libm's `pow`).
+    /// `self^e` (libm's `pow`): the reference's power; the mirror's is
+    /// `cpu::exact::pow_det`.
     fn powf(self, e: Self) -> Self;
     /// The largest integer not above `self` (exact).
     fn floor(self) -> Self;
@@ -62,6 +65,7 @@ pub trait Real:
 }
 
 impl Real for f32 {
+    const MIRROR: bool = true;
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
     const INFINITY: Self = crate::shared::layout::INFINITY;
@@ -100,6 +104,7 @@ impl Real for f32 {
 }
 
 impl Real for f64 {
+    const MIRROR: bool = false;
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
     const INFINITY: Self = f64::MAX;

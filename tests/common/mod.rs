@@ -109,10 +109,12 @@ macro_rules! gpu_sentinel {
     };
 }
 
-/// Whether the GPU is Mesa's lavapipe, where bit-exact agreement is asserted.
-pub fn is_lavapipe(gpu: &Gpu) -> bool {
-    let i = &gpu.info;
-    i.name.to_lowercase().contains("llvmpipe") || i.driver.to_lowercase().contains("llvmpipe")
+/// Whether the GPU image must equal the CPU mirror's in every bit: wherever the kernel
+/// reaches the driver as glint's exact SPIR-V (every float result `NoContraction`), whose
+/// divisions and square roots are correctly rounded by `shaders/exact.wgsl` whatever the
+/// driver. Elsewhere (wgpu's own WGSL path) the driver may fuse and reorder.
+pub fn bit_exact_expected(gpu: &Gpu) -> bool {
+    gpu.kernel.exactness() == glint::gpu::exact::Exactness::NoContraction
 }
 
 /// SplitMix64: small, seeded, good enough for test inputs.
@@ -344,14 +346,13 @@ pub fn render_gpu_rgba8(
     out
 }
 
-/// The agreement GPU and CPU images must reach: on lavapipe every f32 bit of every pixel
-/// and every hit/miss; on other adapters, whose division and square root Vulkan lets round
-/// within a few ULP, at most 0.1% of pixels off in 8 bits and 0.01% hit/miss disagreements.
-/// A pixel may be off by more than 1/255 there: a shadow ray or a reflection that grazes an
-/// edge can go the other way (NVIDIA H200: 2 of 307,200 bb8 pixels with the naive test).
-pub fn check_agreement(gpu_img: &Image, cpu_img: &Image, lavapipe: bool) -> Result<Diff, String> {
+/// The agreement GPU and CPU images must reach: with glint's exact SPIR-V
+/// ([`bit_exact_expected`]) every f32 bit of every pixel and every hit/miss; through wgpu's
+/// WGSL path, where a driver may fuse and reorder, at most 0.1% of pixels off in 8 bits and
+/// 0.01% hit/miss disagreements.
+pub fn check_agreement(gpu_img: &Image, cpu_img: &Image, exact: bool) -> Result<Diff, String> {
     let d = diff(gpu_img, cpu_img);
-    let ok = if lavapipe {
+    let ok = if exact {
         d.bit_exact()
     } else {
         d.differing_pixels * 1000 <= d.pixels && d.hit_miss * 10_000 <= d.pixels
@@ -361,8 +362,8 @@ pub fn check_agreement(gpu_img: &Image, cpu_img: &Image, lavapipe: bool) -> Resu
     } else {
         Err(format!(
             "GPU and CPU images disagree ({}): {d:?}",
-            if lavapipe {
-                "lavapipe: bit-exact required"
+            if exact {
+                "exact SPIR-V: bit-exact required"
             } else {
                 "tolerance"
             }
@@ -466,7 +467,7 @@ pub fn query_both(
             .zip(&cpu)
             .filter(|(a, b)| (a.prim == buffers::PRIM_NONE) != (b.prim == buffers::PRIM_NONE))
             .count();
-        if is_lavapipe(gpu) {
+        if bit_exact_expected(gpu) {
             assert_eq!(
                 bad,
                 0,
@@ -681,4 +682,34 @@ pub fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
     out.extend(b"BIN\0");
     out.extend(bin);
     out
+}
+
+/// Floats of every class: zeros, subnormals, normals around the range's edges, infinities
+/// and NaN, of both signs.
+pub fn specials() -> Vec<f32> {
+    let mut v = vec![
+        0.0f32,
+        f32::from_bits(1),
+        f32::from_bits(2),
+        f32::from_bits(0x0040_0000),
+        f32::from_bits(0x007f_ffff),
+        f32::MIN_POSITIVE,
+        f32::from_bits(0x0080_0001),
+        2f32.powi(-125),
+        0.5,
+        1.0,
+        1.000_000_1,
+        1.5,
+        2.0,
+        3.0,
+        0.1,
+        2f32.powi(126),
+        2f32.powi(127),
+        f32::MAX,
+        f32::INFINITY,
+        f32::NAN,
+    ];
+    let negatives: Vec<f32> = v.iter().map(|x| -x).collect();
+    v.extend(negatives);
+    v
 }
