@@ -2,7 +2,8 @@
 # On whatever Vulkan adapter this machine has (a real GPU, or lavapipe): the GPU tests, then
 # the bench of the seed scenes, the dragon and the peers scenes on the shader (and on the
 # ray-query tracer where the adapter has ray queries), with the Mrays/s of each (primary
-# rays per second at the median frame), the acceleration-structure build apart; then what
+# rays per second at the median frame), the acceleration-structure build apart; the cost of
+# exact math (`--math corrected` against `fast`); then what
 # still differs from the CPU mirror (every seed scene and triangle algorithm, `glint compare`).
 #
 #     bash benches/gpu.sh [ADAPTER]      # ADAPTER: part of the adapter's name (default: the best)
@@ -48,17 +49,36 @@ echo "| scene | tracer | median ms | Mrays/s | AS build ms | largest error vs f6
 echo "|---|---|---|---|---|---|---|---|"
 awk -F'|' 'NR > 4 && ($3 ~ /gpu|cpu-f32/) { printf "|%s|%s|%s|%s|%s|%s|%s|%s|\n", $2, $3, $8, $9, $12, $15, $18, $19 }' "$out/report.md"
 
-# What still differs from the CPU mirror on this driver (docs/exactness.md): `glint compare`
-# on every seed scene with every triangle algorithm, the counts of its "gpu vs cpu" line.
+# The price of exact math on this driver: the seed scenes and the dragon with the
+# corrections always on against the driver's own division and square root.
 echo
-echo "== GPU against the CPU mirror, 1024x768 ($(./target/release/glint adapters | grep -i -m1 -- "${GLINT_ADAPTER:-}" || true))"
-echo "| scene | triangles | pixels differing in some f32 bit | hit/miss | hits whose t differs | largest difference | in 8 bits |"
-echo "|---|---|---|---|---|---|---|"
-for s in sphere triangle umbrella bb8 mitsubishi bb8-shadows mitsubishi-shadows; do
-    for algo in naive moller-trumbore watertight; do
-        line="$(./target/release/glint compare "scenes/$s.toml" --size 1024x768 --triangle "$algo" \
-            --diff "$out/diff-$s-$algo.png" ${adapter:+--adapter "$adapter"} | grep '^gpu vs cpu')"
-        sed -E 's/^gpu vs cpu: [0-9]+ differing pixels \(8-bit\), ([0-9]+) differing in some f32 bit, ([0-9]+) hit\/miss disagreements, ([0-9]+) hits at a distance t that differs in some bit, largest channel difference ([^ ]+) \(([0-9]+) in 8 bits\).*/\1 | \2 | \3 | \4 | \5/' \
-            <<<"$line" | awk -v s="$s" -v a="$algo" '{print "| " s " | " a " | " $0 " |"}'
+echo "== --math corrected against --math fast"
+for math in corrected fast; do
+    ./target/release/glint bench "${scenes[@]:0:6}" --runs 5 --triangle watertight --math "$math" \
+        --out "$out/math-$math" ${adapter:+--adapter "$adapter"} >/dev/null
+    echo "-- $math"
+    awk -F'|' 'NR > 4 && ($3 ~ /gpu/) { printf "|%s|%s|%s|\n", $2, $3, $8 }' "$out/math-$math/report.md"
+done
+
+# GPU against the CPU mirror on this driver (docs/exactness.md): `glint compare` on every
+# seed scene with every triangle algorithm and on the feature and mesh scenes, with exact
+# math (the goal: 0 everywhere) and with the driver's own division and square root.
+scenes_cmp=(sphere triangle umbrella bb8 mitsubishi bb8-shadows mitsubishi-shadows bb8-mirror whitted textured spot suzanne-ply)
+[ -f scenes/meshes/bunny_glmark2.obj.gz ] && scenes_cmp+=(bunny)
+[ -f scenes/meshes/dragon_full.obj.gz ] && scenes_cmp+=(dragon)
+for math in exact fast; do
+    echo
+    echo "== GPU against the CPU mirror, 1024x768, --math $math ($(./target/release/glint adapters | grep -i -m1 -- "${GLINT_ADAPTER:-}" || true))"
+    echo "| scene | triangles | pixels differing in some f32 bit | hit/miss | hits whose t differs | largest difference | in 8 bits |"
+    echo "|---|---|---|---|---|---|---|"
+    for s in "${scenes_cmp[@]}"; do
+        for algo in naive moller-trumbore watertight; do
+            # compare exits 1 when the images differ: that is a row, not a failure.
+            line="$(./target/release/glint compare "scenes/$s.toml" --size 1024x768 --triangle "$algo" \
+                --math "$math" --diff "$out/diff-$s-$algo.png" ${adapter:+--adapter "$adapter"} |
+                grep '^gpu vs cpu' || true)"
+            sed -E 's/^gpu vs cpu: [0-9]+ differing pixels \(8-bit\), ([0-9]+) differing in some f32 bit, ([0-9]+) hit\/miss disagreements, ([0-9]+) hits at a distance t that differs in some bit, largest channel difference ([^ ]+) \(([0-9]+) in 8 bits\).*/\1 | \2 | \3 | \4 | \5/' \
+                <<<"$line" | awk -v s="$s" -v a="$algo" '{print "| " s " | " a " | " $0 " |"}'
+        done
     done
 done

@@ -26,6 +26,7 @@ use scene::{Scene, scene_arg};
 /// `traversal`, `algorithm`, `width`, `height`, `warnings`, `ray_query`.
 #[pyfunction]
 #[pyo3(signature = (renderer, scene, *, size=None, samples=None, triangle=None, max_depth=None, math="exact"))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments
 fn compare_on<'py>(
     py: Python<'py>,
     renderer: &Renderer,

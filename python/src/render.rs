@@ -52,6 +52,7 @@ impl Renderer {
     /// the default), `corrected` (the corrections even where the driver is exact) or
     /// `fast` (the driver's own). Ctrl-C stops the render (KeyboardInterrupt).
     #[pyo3(signature = (scene, *, size=None, samples=None, triangle=None, max_depth=None, math="exact"))]
+    #[allow(clippy::too_many_arguments)] // Python's keyword arguments
     fn render<'py>(
         &self,
         py: Python<'py>,

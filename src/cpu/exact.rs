@@ -197,37 +197,6 @@ pub fn off_by(exact: f32, ulps: i32) -> f32 {
     f32::from_bits((bits & 0x8000_0000) | moved)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_few_quotients_and_roots() {
-        let mut exact_div = |a: f32, b: f32| a / b;
-        let mut exact_sqrt = |x: f32| x.sqrt();
-        for (a, b) in [
-            (1.0f32, 3.0f32),
-            (2.0, 7.0),
-            (-5.5, 0.1),
-            (1e-40, 3.0),
-            (3e38, 1e-3),
-        ] {
-            assert_eq!(
-                div_rn(a, b, &mut exact_div).to_bits(),
-                (a / b).to_bits(),
-                "{a} / {b}"
-            );
-        }
-        for x in [2.0f32, 3.0, 1e-40, 1e30, 0.5] {
-            assert_eq!(
-                sqrt_rn(x, &mut exact_sqrt).to_bits(),
-                x.sqrt().to_bits(),
-                "sqrt {x}"
-            );
-        }
-    }
-}
-
 // ---- a power without the driver's exp2 and log2 -------------------------------------------
 
 /// WGSL `product_error`: Dekker's exact rounding error of the product `a * b == p`.
@@ -243,7 +212,7 @@ pub fn product_error<R: Real>(a: R, b: R, p: R) -> R {
 }
 
 /// 1/ln 2 as the unevaluated sum `INV_LN2_HI + INV_LN2_LO` (to 2^-51).
-const INV_LN2_HI: f32 = 1.442695;
+const INV_LN2_HI: f32 = std::f32::consts::LOG2_E; // 1.442695
 const INV_LN2_LO: f32 = 1.925963e-08;
 /// 2/3 as the unevaluated sum `TWO_THIRDS_HI + TWO_THIRDS_LO` (to 2^-50).
 const TWO_THIRDS_HI: f32 = 0.666_666_7;
@@ -267,7 +236,7 @@ pub fn two_sum_error(a: f32, b: f32, s: f32) -> f32 {
 /// [-125, 127]); NaN for a negative or NaN argument. The shader's
 /// `div_rn` is IEEE division, which Rust's `/` is.
 pub fn pow_det(x: f32, y: f32) -> f32 {
-    if !(x >= 0.0) || !(y >= 0.0) {
+    if x.is_nan() || y.is_nan() || x < 0.0 || y < 0.0 {
         return nan_rn();
     }
     if y < POW_TINY_Y || x == 1.0 {
@@ -291,7 +260,7 @@ pub fn pow_det(x: f32, y: f32) -> f32 {
         k = -126 - shift as i32;
     }
     let mut m = f32::from_bits((bits & 0x7f_ffff) | 0x3f80_0000);
-    if m > 1.414_213_5 {
+    if m > std::f32::consts::SQRT_2 {
         m *= 0.5;
         k += 1;
     }
@@ -334,7 +303,7 @@ pub fn pow_det(x: f32, y: f32) -> f32 {
     }
     let f = (w_hi - n) + w_lo;
     let e = 1.0
-        + f * (0.693_147_2
+        + f * (std::f32::consts::LN_2
             + f * (0.240_226_5
                 + f * (0.055_504_11
                     + f * (0.009_618_129
@@ -342,4 +311,35 @@ pub fn pow_det(x: f32, y: f32) -> f32 {
                             + f * (0.000_154_035_3
                                 + f * (1.525_273_4e-5 + f * 1.321_548_7e-6)))))));
     e * f32::from_bits(((n as i32 + 127) as u32) << 23)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_few_quotients_and_roots() {
+        let mut exact_div = |a: f32, b: f32| a / b;
+        let mut exact_sqrt = |x: f32| x.sqrt();
+        for (a, b) in [
+            (1.0f32, 3.0f32),
+            (2.0, 7.0),
+            (-5.5, 0.1),
+            (1e-40, 3.0),
+            (3e38, 1e-3),
+        ] {
+            assert_eq!(
+                div_rn(a, b, &mut exact_div).to_bits(),
+                (a / b).to_bits(),
+                "{a} / {b}"
+            );
+        }
+        for x in [2.0f32, 3.0, 1e-40, 1e30, 0.5] {
+            assert_eq!(
+                sqrt_rn(x, &mut exact_sqrt).to_bits(),
+                x.sqrt().to_bits(),
+                "sqrt {x}"
+            );
+        }
+    }
 }
