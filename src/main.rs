@@ -1,4 +1,5 @@
-//! The `glint` command line: `render`, `view`, `compare`, `diff`, `adapters`, `bench`. It parses
+//! The `glint` command line: `render`, `check`, `view`, `compare`, `diff`, `adapters`,
+//! `bench`. It parses
 //! the arguments, reads the environment once, draws the progress bar and prints; the
 //! library ([`glint::render`]) does the work.
 
@@ -32,7 +33,18 @@ fn main() {
     let cli = Cli::parse();
     // compare and diff keep 1 for "different": their errors exit 3 (usage errors: clap's 2).
     let verdict = matches!(cli.command, Command::Compare { .. } | Command::Diff { .. });
-    match run(cli) {
+    // --threads: every parallel loop of the library runs in this process's one pool.
+    let pool = cli.threads.map(|n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n as usize)
+            .build()
+    });
+    let result = match pool {
+        Some(Ok(pool)) => pool.install(|| run(cli)),
+        Some(Err(e)) => Err(anyhow::anyhow!("--threads: {e}")),
+        None => run(cli),
+    };
+    match result {
         Ok(Verdict::Equal) => {}
         Ok(Verdict::Different) => std::process::exit(1),
         Err(e) => {
@@ -57,19 +69,24 @@ fn run(cli: Cli) -> Result<Verdict> {
             scene,
             output,
             verbose,
+            quiet,
             backend,
             no_cache,
             frame,
             common,
-        } => done(render(
-            &scene,
-            &output,
-            verbose,
-            backend.into(),
-            no_cache,
-            frame,
-            common,
-        )),
+        } => {
+            let output = output.unwrap_or_else(|| default_output(&scene));
+            done(render(
+                &scene,
+                &output,
+                Chatter { verbose, quiet },
+                backend.into(),
+                no_cache,
+                frame,
+                common,
+            ))
+        }
+        Command::Check { scenes, confine } => check(&scenes, confine),
         Command::Compare {
             scene,
             frame,
@@ -177,10 +194,63 @@ fn options(frame: FrameArgs) -> RenderOptions {
     }
 }
 
+/// `render`'s output when `-o` is absent: the scene's file name with `.png`, in the current
+/// folder, as pbrt and Mitsuba derive theirs.
+fn default_output(scene: &Path) -> PathBuf {
+    let stem = scene.file_stem().unwrap_or(std::ffi::OsStr::new("glint"));
+    PathBuf::from(stem).with_extension("png")
+}
+
+/// How much `render` prints besides warnings and errors.
+#[derive(Clone, Copy)]
+struct Chatter {
+    /// Every stage's time.
+    verbose: bool,
+    /// Nothing: no summary, no notes, no progress bar.
+    quiet: bool,
+}
+
+/// `glint check`: each scene read and validated as `render` reads it; the first error of
+/// each is printed, and the status is 1 when any scene is bad.
+fn check(scenes: &[PathBuf], confine: bool) -> Result<Verdict> {
+    let mut bad = 0;
+    for path in scenes {
+        match load(path, confine, None) {
+            Ok(scene) => {
+                for w in &scene.warnings {
+                    eprintln!("warning: {w}");
+                }
+                let (t, s) = (scene.triangles.len(), scene.spheres.len());
+                let plural = |n: usize| if n == 1 { "" } else { "s" };
+                println!(
+                    "{}: good ({t} triangle{}, {s} sphere{}, {} light{})",
+                    path.display(),
+                    plural(t),
+                    plural(s),
+                    scene.lights.len(),
+                    plural(scene.lights.len())
+                );
+            }
+            Err(e) => {
+                bad += 1;
+                eprintln!("error: {e:#}");
+            }
+        }
+    }
+    if bad > 0 {
+        bail!(
+            "{bad} of {} scene{} did not pass",
+            scenes.len(),
+            if scenes.len() == 1 { "" } else { "s" }
+        );
+    }
+    Ok(Verdict::Equal)
+}
+
 fn render(
     scene: &Path,
     output: &Path,
-    verbose: bool,
+    chatter: Chatter,
     backend: glint::Backend,
     no_cache: bool,
     frame: FrameArgs,
@@ -196,17 +266,22 @@ fn render(
     let scene = load(scene, common.confine, cache)?;
     let renderer = Renderer::with_options(backend, &gpu_options(common.adapter.as_deref()))?;
     let bar = ProgressBar::new(Instant::now());
+    let Chatter { verbose, quiet } = chatter;
     let report = Job::new(scene, output)
         .options(options(frame))
         .on_event(|e| match e {
+            Event::Rows { .. } if quiet => {}
             Event::Rows { done, total } => bar.show(done, total),
             Event::Cache(_) if !verbose => {}
+            Event::Note(_) if quiet => {}
             e => eprintln!("{e}"),
         })
         .run(&renderer);
     bar.finish();
     let report = report?;
-    println!("{report}");
+    if !quiet {
+        println!("{report}");
+    }
     if verbose {
         let total: f64 = report.stages.iter().map(|(_, d)| d.as_secs_f64()).sum();
         for (name, d) in &report.stages {

@@ -357,6 +357,74 @@ fn gltf_warnings_and_errors() {
     assert!(e.contains("glTF: "), "{e}");
 }
 
+/// A node graph that is not a forest is refused at once, naming the node: a node that is
+/// its own child, a longer cycle, a child of two parents, a root listed twice. The twin is
+/// the document's own tree (root → mesh node), which loads.
+#[test]
+fn gltf_node_cycles_are_errors_not_hangs() {
+    let dir = common::Scratch::new("gltf-cycles");
+    let (v, f) = obj_mesh("suzanne");
+    let (json, bin) = document(&v, &f, Width::U32, "", &[], None);
+    let tree = r#""nodes":[{"name":"root","children":[1]},{"mesh":0"#;
+    assert!(json.contains(tree), "{json}");
+    std::fs::write(dir.join("tree.glb"), common::glb(&json, &bin)).unwrap();
+    assert!(scene(&dir, "tree.glb", true).is_ok());
+    let cases = [
+        // Node 0 its own child.
+        (
+            r#""nodes":[{"name":"root","children":[0,1]},{"mesh":0"#,
+            "",
+            0,
+        ),
+        // 0 → 1 → 0.
+        (
+            r#""nodes":[{"name":"root","children":[1]},{"children":[0],"mesh":0"#,
+            "",
+            0,
+        ),
+        // Node 1 the child of 0 and of 2.
+        (
+            r#""nodes":[{"name":"root","children":[1]},{"mesh":0"#,
+            r#"{"children":[1]}"#,
+            1,
+        ),
+        // A root listed twice.
+        (tree, "", 0),
+    ];
+    for (k, (nodes, extra, index)) in cases.into_iter().enumerate() {
+        let mut j = json.replacen(tree, nodes, 1);
+        if !extra.is_empty() {
+            // A third node, also a root.
+            j = j.replacen(
+                r#""scenes":[{"nodes":[0]}]"#,
+                r#""scenes":[{"nodes":[0,2]}]"#,
+                1,
+            );
+            let end = j.find(r#""meshes""#).unwrap();
+            let close = j[..end].rfind(']').unwrap();
+            j.insert_str(close, &format!(",{extra}"));
+        }
+        if k == 3 {
+            j = j.replacen(
+                r#""scenes":[{"nodes":[0]}]"#,
+                r#""scenes":[{"nodes":[0,0]}]"#,
+                1,
+            );
+        }
+        let start = std::time::Instant::now();
+        let e = gltf_error(&dir, &format!("c{k}.glb"), &common::glb(&j, &bin));
+        assert!(
+            e.contains(&format!("glTF node {index}: is reached twice")),
+            "case {k}: {e}\n{j}"
+        );
+        assert!(
+            start.elapsed().as_secs() < 10,
+            "case {k} took {:?}",
+            start.elapsed()
+        );
+    }
+}
+
 /// A smooth glTF's NORMALs shade as the OBJ's `vn` do, in every bit (identity transform).
 /// The twin: without NORMALs the computed normals differ.
 #[test]

@@ -57,10 +57,13 @@ fn the_good_scene_parses() {
 
 #[test]
 fn malformed_unknown_and_missing() {
-    bad("fov = 45.0", "fov = 45.0.0", 6, "fov");
-    bad("fov = 45.0", "fov = 45.0\nzoom = 2", 7, "zoom");
-    bad("radius = 1.0\n", "", 18, "radius"); // the [[spheres]] table that lacks it
-    bad("fov = 45.0", "fov = \"wide\"", 6, "fov");
+    // Each key by its whole path, the table's included.
+    bad("fov = 45.0", "fov = 45.0.0", 6, "camera.fov");
+    bad("fov = 45.0", "fov = 45.0\nzoom = 2", 7, "camera.zoom");
+    bad("radius = 1.0\n", "", 18, "spheres[0].radius"); // the [[spheres]] table that lacks it
+    bad("fov = 45.0", "fov = \"wide\"", 6, "camera.fov");
+    // A table that does not exist is named alone.
+    bad("[camera]", "[camra]", 2, "camra");
 }
 
 #[test]

@@ -12,6 +12,8 @@ SCRIPT = textwrap.dedent(
     """
     import os, signal, sys, threading, time
     import glint
+    # Python leaves SIGINT ignored where its parent ignored it (a shell's background job).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     s = glint.Scene.load(sys.argv[1])
     r = glint.Renderer("cpu-f64")
     interrupt = sys.argv[2] == "1"

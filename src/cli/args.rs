@@ -15,6 +15,10 @@ use glint::scene::TriangleAlgorithm;
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    /// CPU threads for the CPU tracers, the BVH build and the mesh readers (default: one
+    /// per core).
+    #[arg(long, global = true, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub threads: Option<u32>,
 }
 
 impl From<Backend> for glint::Backend {
@@ -115,12 +119,16 @@ pub enum Command {
     Render {
         /// The scene file (TOML).
         scene: PathBuf,
-        /// Output image: .png (8-bit) or .exr (the f32 image exactly, t in alpha).
+        /// Output image: .png (8-bit) or .exr (the f32 image exactly, t in alpha); default:
+        /// the scene's name with .png, in the current folder (scenes/bb8.toml → bb8.png).
         #[arg(short, long)]
-        output: PathBuf,
+        output: Option<PathBuf>,
         /// Print the time of each stage (read, gunzip, parse, BVH build, trace, PNG, ...).
-        #[arg(short, long)]
+        #[arg(short, long, conflicts_with = "quiet")]
         verbose: bool,
+        /// Print nothing but warnings and errors (no summary line, notes or progress bar).
+        #[arg(short, long)]
+        quiet: bool,
         /// Which tracer.
         #[arg(long, value_enum, default_value = "auto")]
         backend: Backend,
@@ -178,6 +186,17 @@ pub enum Command {
         math: MathArg,
         #[command(flatten)]
         common: CommonArgs,
+    },
+    /// Read and check a scene as `render` would (the TOML, every key, the meshes, MTLs and
+    /// textures it names) without rendering it: exit status 0 when it is good, 1 with the
+    /// error (file, line and key) when not. Warnings are printed either way.
+    Check {
+        /// The scene files (TOML).
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+        /// Read only files below each scene's own folder (meshes, MTLs; links followed).
+        #[arg(long)]
+        confine: bool,
     },
     /// List the Vulkan adapters, best first, with their drivers and versions.
     Adapters,

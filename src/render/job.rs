@@ -146,14 +146,25 @@ impl fmt::Display for RenderReport {
             Some(p) => write!(f, "{}: ", p.display())?,
             None => f.write_str("memory: ")?,
         }
+        let count = |n: usize, one: &str| match n {
+            1 => format!("1 {one}"),
+            n => format!("{n} {one}s"),
+        };
+        write!(f, "{}x{}, ", self.width, self.height)?;
+        if self.triangles > 0 {
+            write!(
+                f,
+                "{} ({}), ",
+                count(self.triangles as usize, "triangle"),
+                self.algorithm
+            )?;
+        }
+        if self.spheres > 0 || self.triangles == 0 {
+            write!(f, "{}, ", count(self.spheres, "sphere"))?;
+        }
         write!(
             f,
-            "{}x{}, {} triangles ({}), {} spheres, {:.1} ms, {}",
-            self.width,
-            self.height,
-            self.triangles,
-            self.algorithm,
-            self.spheres,
+            "{:.1} ms, {}",
             self.frame.as_secs_f64() * 1e3,
             self.description
         )

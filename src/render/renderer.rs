@@ -258,8 +258,8 @@ impl Renderer {
                     (
                         Tracer::Cpu,
                         Some(
-                            "no Vulkan adapter, so the CPU tracer renders this (for the GPU \
-                             tracer: apt-get install mesa-vulkan-drivers libvulkan1)"
+                            "CPU tracer: no Vulkan adapter (apt-get install \
+                             mesa-vulkan-drivers libvulkan1 for one)"
                                 .to_string(),
                         ),
                     )
@@ -267,10 +267,7 @@ impl Renderer {
                     (
                         Tracer::Cpu,
                         Some(format!(
-                            "the only Vulkan adapter is {}, a CPU implementation: glint's CPU \
-                             tracer renders this, faster than it for a whole render (device \
-                             start and shader compile included; --backend gpu runs the shader \
-                             there)",
+                            "CPU tracer: the only Vulkan adapter, {}, is a CPU Vulkan (--backend gpu to use it)",
                             infos[0].name
                         )),
                     )
@@ -318,7 +315,7 @@ impl Renderer {
             Backend::Auto if is_cpu_adapter(&gpu.info) => (
                 Tracer::Cpu,
                 Some(format!(
-                    "the adapter is {}, a CPU implementation: glint's CPU tracer renders this",
+                    "CPU tracer: the adapter, {}, is a CPU Vulkan (--backend gpu to use it)",
                     gpu.info.name
                 )),
             ),

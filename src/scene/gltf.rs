@@ -81,6 +81,15 @@ pub enum GltfError {
     /// No scene to draw.
     #[error("glTF: the file has no scene")]
     NoScene,
+    /// The node graph is not a forest: a node reached twice (its own ancestor, or the
+    /// child of two parents), which glTF forbids and which would draw it without end.
+    #[error("glTF node {index}: {message}")]
+    Node {
+        /// The node's index.
+        index: usize,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// A glTF material as glint takes it.
@@ -234,7 +243,18 @@ pub fn read(
     let mut stack: Vec<(gltf::Node<'_>, DMat4)> =
         scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
     stack.reverse();
+    // glTF's nodes form disjoint trees: each is drawn once, and one reached again (a cycle,
+    // a second parent, a root listed twice) is an error, not a loop.
+    let mut seen = vec![false; g.document.nodes().len()];
     while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut seen[node.index()], true) {
+            return Err(GltfError::Node {
+                index: node.index(),
+                message: "is reached twice (a cycle in `children`, a second parent, or a \
+                          root listed twice); glTF's nodes must form disjoint trees"
+                    .to_string(),
+            });
+        }
         let m = parent
             * DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         if node.skin().is_some() {

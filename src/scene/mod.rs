@@ -476,12 +476,72 @@ fn syntax_error(src: &str, path: &Path, e: &toml::de::Error) -> SceneError {
             (!s.is_empty() && s.len() <= 40 && !s.contains('\n')).then(|| s.to_string())
         })
         .unwrap_or_else(|| "(document)".into());
+    // The key's whole path: `camera.focal`, `lights[1].colour`, not `focal`.
+    let key = match table_at(src, span.start) {
+        Some(t)
+            if !key.starts_with('(')
+                && !key.contains(['.', '['])
+                && t != key
+                && !t.ends_with(&format!(".{key}"))
+                && !t.starts_with(&format!("{key}[")) =>
+        {
+            format!("{t}.{key}")
+        }
+        _ => key,
+    };
     SceneError::Syntax {
         file: path.to_owned(),
         line: line_of(src, span.start),
         key,
         message,
     }
+}
+
+/// The table that holds byte `offset` of a scene's text, as a key path (`camera`,
+/// `lights[1]`, `materials.red`, `meshes[0].transform`); `None` at the top level. Read from
+/// the table headers above the offset, line by line, as TOML defines them: `[[name]]`
+/// appends to an array of tables, `[name]` opens a table, and a header below an array's
+/// name extends its last element.
+fn table_at(src: &str, offset: usize) -> Option<String> {
+    let is_path = |s: &str| {
+        s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '"' || c == '_')
+            && s.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "_-.\" ".contains(c))
+    };
+    let mut counts: std::collections::HashMap<String, usize> = Default::default();
+    let mut table = None;
+    let mut start = 0;
+    for line in src.split_inclusive('\n') {
+        if start > offset {
+            break;
+        }
+        start += line.len();
+        let t = line.split('#').next().unwrap_or("").trim();
+        let (name, array) = if let Some(n) = t.strip_prefix("[[").and_then(|r| r.strip_suffix("]]"))
+        {
+            (n.trim(), true)
+        } else if let Some(n) = t.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
+            (n.trim(), false)
+        } else {
+            continue;
+        };
+        if !is_path(name) {
+            continue;
+        }
+        // Below an array of tables: `[a.b]` is `a[last].b`.
+        let (head, rest) = name.split_once('.').unwrap_or((name, ""));
+        let mut path = match counts.get(head) {
+            Some(&n) if !rest.is_empty() => format!("{head}[{}].{rest}", n - 1),
+            _ => name.to_string(),
+        };
+        if array {
+            let n = counts.entry(name.to_string()).or_insert(0);
+            path = format!("{path}[{n}]");
+            *n += 1;
+        }
+        table = Some(path);
+    }
+    table
 }
 
 /// The largest colour component (light colour, ka, kd, ks, ambient, background) a scene
