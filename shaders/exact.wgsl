@@ -248,10 +248,12 @@ const INV_LN2_LO: f32 = 1.925963e-08;
 /// 2/3 as the unevaluated sum `TWO_THIRDS_HI + TWO_THIRDS_LO` (to 2^-50).
 const TWO_THIRDS_HI: f32 = 0.6666667;
 const TWO_THIRDS_LO: f32 = -1.9868216e-08;
-/// Below it a power's exponent changes no bit of the result: x^y rounds to 1.
-const POW_TINY_Y: f32 = 8.6736174e-19; // 2^-60
-/// Above it every power is 0, 1 or infinity (and Veltkamp's split of y cannot overflow).
-const POW_HUGE_Y: f32 = 1.8446744e19; // 2^64
+/// The bits of 2^-60: below it a power's exponent changes no bit of the result (x^y
+/// rounds to 1).
+const POW_TINY_Y: u32 = 0x21800000u;
+/// The bits of 2^64: above it every power is 0, 1 or infinity (and Veltkamp's split of y
+/// cannot overflow).
+const POW_HUGE_Y: u32 = 0x5f800000u;
 
 /// `a + b == s + two_sum_error(a, b, s)` exactly for `s = a + b` (Knuth's TwoSum).
 fn two_sum_error(a: f32, b: f32, s: f32) -> f32 {
@@ -269,23 +271,28 @@ fn two_sum_error(a: f32, b: f32, s: f32) -> f32 {
 /// |s| ≤ 0.172, carried as a sum of two floats; y·log2 x = n + f with n an integer and
 /// |f| ≤ ½; 2^f by its Taylor series to degree 8 (error 2^-28); 2^n by the exponent's bits.
 fn pow_det(x: f32, y: f32) -> f32 {
-    if !(x >= 0.0) || !(y >= 0.0) {
+    // The special cases by their bits: a driver that flushes subnormals compares them as 0.
+    let xb = bitcast<u32>(x);
+    let yb = bitcast<u32>(y);
+    let xm = xb & 0x7fffffffu;
+    let ym = yb & 0x7fffffffu;
+    if xm > 0x7f800000u || ym > 0x7f800000u || (xb != xm && xm != 0u) || (yb != ym && ym != 0u) {
         return nan_rn();
     }
-    if y < POW_TINY_Y || x == 1.0 {
+    if ym == 0u || xm == 0x3f800000u {
         return 1.0;
     }
-    if x == 0.0 {
-        return 0.0;
+    if xm == 0u || xm == 0x7f800000u {
+        return bitcast<f32>(xm);
     }
-    if bitcast<u32>(x) == 0x7f800000u {
-        return x;
+    if ym < POW_TINY_Y {
+        return 1.0;
     }
-    if y > POW_HUGE_Y {
-        return select(bitcast<f32>(0x7f800000u), 0.0, x < 1.0);
+    if ym > POW_HUGE_Y {
+        return select(bitcast<f32>(0x7f800000u), 0.0, xm < 0x3f800000u);
     }
     // x = m · 2^k, m in [√½, √2]; a subnormal x normalised by its leading zeros.
-    var bits = bitcast<u32>(x);
+    var bits = xm;
     var k = i32(bits >> 23u) - 127;
     if (bits >> 23u) == 0u {
         let shift = countLeadingZeros(bits) - 8u;

@@ -217,10 +217,12 @@ const INV_LN2_LO: f32 = 1.925963e-08;
 /// 2/3 as the unevaluated sum `TWO_THIRDS_HI + TWO_THIRDS_LO` (to 2^-50).
 const TWO_THIRDS_HI: f32 = 0.666_666_7;
 const TWO_THIRDS_LO: f32 = -1.986_821_6e-8;
-/// Below it a power's exponent changes no bit of the result: x^y rounds to 1.
-const POW_TINY_Y: f32 = 8.673_617e-19; // 2^-60
-/// Above it every power is 0, 1 or infinity (and Veltkamp's split of y cannot overflow).
-const POW_HUGE_Y: f32 = 1.844_674_4e19; // 2^64
+/// The bits of 2^-60: below it a power's exponent changes no bit of the result (x^y
+/// rounds to 1).
+const POW_TINY_Y: u32 = 0x2180_0000;
+/// The bits of 2^64: above it every power is 0, 1 or infinity (and Veltkamp's split of y
+/// cannot overflow).
+const POW_HUGE_Y: u32 = 0x5f80_0000;
 
 /// WGSL `two_sum_error`: `a + b == s + two_sum_error(a, b, s)` exactly for `s = a + b`.
 #[inline]
@@ -236,23 +238,26 @@ pub fn two_sum_error(a: f32, b: f32, s: f32) -> f32 {
 /// [-125, 127]); NaN for a negative or NaN argument. The shader's
 /// `div_rn` is IEEE division, which Rust's `/` is.
 pub fn pow_det(x: f32, y: f32) -> f32 {
-    if x.is_nan() || y.is_nan() || x < 0.0 || y < 0.0 {
+    // The special cases by their bits: a driver that flushes subnormals compares them as 0.
+    let (xb, yb) = (x.to_bits(), y.to_bits());
+    let (xm, ym) = (xb & 0x7fff_ffff, yb & 0x7fff_ffff);
+    if xm > 0x7f80_0000 || ym > 0x7f80_0000 || (xb != xm && xm != 0) || (yb != ym && ym != 0) {
         return nan_rn();
     }
-    if y < POW_TINY_Y || x == 1.0 {
+    if ym == 0 || xm == 0x3f80_0000 {
         return 1.0;
     }
-    if x == 0.0 {
-        return 0.0;
+    if xm == 0 || xm == 0x7f80_0000 {
+        return f32::from_bits(xm);
     }
-    if x.to_bits() == 0x7f80_0000 {
-        return x;
+    if ym < POW_TINY_Y {
+        return 1.0;
     }
-    if y > POW_HUGE_Y {
-        return if x < 1.0 { 0.0 } else { f32::INFINITY };
+    if ym > POW_HUGE_Y {
+        return if xm < 0x3f80_0000 { 0.0 } else { f32::INFINITY };
     }
     // x = m · 2^k, m in [√½, √2]; a subnormal x normalised by its leading zeros.
-    let mut bits = x.to_bits();
+    let mut bits = xm;
     let mut k = (bits >> 23) as i32 - 127;
     if (bits >> 23) == 0 {
         let shift = bits.leading_zeros() - 8;
