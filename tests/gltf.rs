@@ -501,3 +501,38 @@ fn gltf_normals_are_the_objs() {
         "the twin: computed normals differ"
     );
 }
+
+/// A GLB whose lengths lie (a JSON chunk longer than the file, a total length beyond it, a
+/// binary chunk that claims 2 GiB) is refused at once with the file named, never read past
+/// its end. The twin: the honest GLB loads.
+#[test]
+fn glb_chunk_lengths_that_lie_are_refused() {
+    let dir = common::Scratch::new("gltf-glb-lies");
+    let (v, f) = obj_mesh("suzanne");
+    let (json, bin) = document(&v, &f, Width::U32, "", &[], None);
+    let good = common::glb(&json, &bin);
+    std::fs::write(dir.join("ok.glb"), &good).unwrap();
+    assert!(scene(&dir, "ok.glb", true).is_ok());
+    let json_len = u32::from_le_bytes(good[12..16].try_into().unwrap()) as usize;
+    let put = |at: usize, value: u32| {
+        let mut g = good.clone();
+        g[at..at + 4].copy_from_slice(&value.to_le_bytes());
+        g
+    };
+    let cases = [
+        ("json.glb", put(12, 0x7fff_fff0)),
+        ("total.glb", put(8, good.len() as u32 + 4096)),
+        ("bin.glb", put(20 + json_len, 0x8000_0000)),
+        ("cut.glb", good[..good.len() / 2].to_vec()),
+    ];
+    for (name, bytes) in cases {
+        let start = std::time::Instant::now();
+        let e = gltf_error(&dir, name, &bytes);
+        assert!(e.contains(name), "{name}: {e}");
+        assert!(
+            start.elapsed().as_secs() < 5,
+            "{name}: {:?}",
+            start.elapsed()
+        );
+    }
+}
