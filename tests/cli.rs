@@ -134,6 +134,16 @@ fn check_says_good_or_names_the_error_by_its_exit_status() {
     let (_, err) = text(&o);
     assert_eq!(o.status.code(), Some(1));
     assert!(err.contains("gone.obj"), "{err}");
+    // A missing mesh beside glint's own fetch script says how to get it; elsewhere not.
+    std::fs::write(d.join("fetch-meshes.sh"), "#!/bin/sh\n").unwrap();
+    let o = glint(&d, &["check", "mesh.toml"]);
+    let (_, err) = text(&o);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(err.contains("meshes[0].file") && err.contains("gone.obj"), "{err}");
+    assert!(err.contains("fetch-meshes.sh"), "{err}");
+    std::fs::remove_file(d.join("fetch-meshes.sh")).unwrap();
+    let (_, err) = text(&glint(&d, &["check", "mesh.toml"]));
+    assert!(!err.contains("fetch-meshes.sh"), "{err}");
     // Every shipped scene that needs no downloaded mesh is good.
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     for name in [

@@ -25,6 +25,15 @@ pub enum MeshError {
     /// The OBJ could not be read.
     #[error("{0}")]
     Read(ReadError),
+    /// The mesh is missing beside a scene whose folder has the script that fetches its
+    /// meshes (glint's own `scenes/`).
+    #[error("{error} (glint's scenes get their meshes with `bash {script}`)")]
+    NotFetched {
+        /// Why it could not be read.
+        error: ReadError,
+        /// The script, beside the scene.
+        script: PathBuf,
+    },
     /// The `.gz` does not inflate.
     #[error("cannot gunzip: {0}")]
     Gunzip(std::io::Error),
@@ -319,6 +328,21 @@ fn corner_normals(parsed: &Parsed, xf: &Transform) -> Result<Vec<[[f32; 3]; 3]>,
         .collect()
 }
 
+/// A mesh's read error, with the way to fetch it where the scene's folder has
+/// `fetch-meshes.sh` and the file is not there.
+fn not_fetched(scene: &Path, error: ReadError) -> MeshError {
+    let missing = matches!(&error, ReadError::Io(e) if e.kind() == std::io::ErrorKind::NotFound);
+    let script = scene
+        .parent()
+        .unwrap_or(Path::new(""))
+        .join("fetch-meshes.sh");
+    if missing && script.is_file() {
+        MeshError::NotFetched { error, script }
+    } else {
+        MeshError::Read(error)
+    }
+}
+
 /// Loads mesh entry `i` into `triangles` (and its MTL materials into `materials`). Three
 /// ways, each ending in [`Entry::complete`]: from the cache (a large mesh that glint's
 /// reader placed before), by glint's reader (the scene names the material and the OBJ holds
@@ -331,7 +355,7 @@ pub(super) fn load(
 ) -> Result<(), SceneError> {
     let entry = Entry::new(v, i, m);
     let raw = crate::stages::time("read", || (v.read)(&entry.obj_path))
-        .map_err(|e| entry.fail(MeshError::Read(e)))?;
+        .map_err(|e| entry.fail(not_fetched(v.path, e)))?;
     let xf = mesh_transform(v, i, m)?;
     // A textured material needs the file's texture coordinates: such a mesh is neither
     // cached (the cache holds positions) nor read by glint's OBJ reader (which skips `vt`).
