@@ -31,6 +31,10 @@ fn main() {
         std::process::exit(130);
     });
     let cli = Cli::parse();
+    if let Err(e) = cli::env::check() {
+        eprintln!("error: {e}");
+        std::process::exit(2);
+    }
     // compare and diff keep 1 for "different": their errors exit 3 (usage errors: clap's 2).
     let verdict = matches!(cli.command, Command::Compare { .. } | Command::Diff { .. });
     // --threads: every parallel loop of the library runs in this process's one pool.

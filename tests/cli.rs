@@ -139,7 +139,10 @@ fn check_says_good_or_names_the_error_by_its_exit_status() {
     let o = glint(&d, &["check", "mesh.toml"]);
     let (_, err) = text(&o);
     assert_eq!(o.status.code(), Some(1));
-    assert!(err.contains("meshes[0].file") && err.contains("gone.obj"), "{err}");
+    assert!(
+        err.contains("meshes[0].file") && err.contains("gone.obj"),
+        "{err}"
+    );
     assert!(err.contains("fetch-meshes.sh"), "{err}");
     std::fs::remove_file(d.join("fetch-meshes.sh")).unwrap();
     let (_, err) = text(&glint(&d, &["check", "mesh.toml"]));
@@ -191,4 +194,35 @@ fn threads_change_no_bit() {
     // 0 threads is a usage error.
     let o = glint(&d, &["render", scene.to_str().unwrap(), "--threads", "0"]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// A `GLINT_*` variable set to a value glint cannot use is an error naming it (exit 2, as
+/// for a bad flag), not a setting ignored in silence. The twin: a good value renders.
+#[test]
+fn a_bad_environment_value_is_named() {
+    let d = common::Scratch::new("cli-env");
+    std::fs::write(d.join("s.toml"), SCENE).unwrap();
+    for (k, v) in [
+        ("GLINT_MAX_INPUT_MIB", "lots"),
+        ("GLINT_CACHE_MIB", "-1"),
+        ("GLINT_TRAVERSAL", "rays"),
+        ("GLINT_PACKET_SHADOWS", "yes"),
+    ] {
+        let o = common::glint_command()
+            .current_dir(&*d)
+            .args(["render", "s.toml", "--backend", "cpu", "-q"])
+            .env(k, v)
+            .output()
+            .unwrap();
+        let (_, err) = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{k}={v}: {err}");
+        assert!(err.contains(k) && err.contains(v), "{err}");
+    }
+    let o = common::glint_command()
+        .current_dir(&*d)
+        .args(["render", "s.toml", "--backend", "cpu", "-q"])
+        .env("GLINT_MAX_INPUT_MIB", "64")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o).1);
 }

@@ -84,3 +84,29 @@ pub fn max_input_bytes() -> u64 {
             |mib| mib.saturating_mul(1 << 20),
         )
 }
+
+/// Every `GLINT_*` setting the command line reads, checked once at its start: a value that
+/// is set but cannot be used is an error naming the variable, never ignored in silence.
+pub fn check() -> Result<(), String> {
+    let number = |k: &str| match std::env::var(k) {
+        Ok(v) if v.trim().parse::<u64>().is_err() => Err(format!(
+            "{k}={v:?}: expected a whole number (unset it for the default)"
+        )),
+        Ok(_) | Err(std::env::VarError::NotPresent) => Ok(()),
+        Err(e) => Err(format!("{k}: {e}")),
+    };
+    let one_of = |k: &str, allowed: &[&str]| match std::env::var(k) {
+        Ok(v) if !allowed.contains(&v.as_str()) => Err(format!(
+            "{k}={v:?}: expected {} (unset it for the default)",
+            allowed.join(" or ")
+        )),
+        Ok(_) | Err(std::env::VarError::NotPresent) => Ok(()),
+        Err(e) => Err(format!("{k}: {e}")),
+    };
+    number("GLINT_MAX_BUFFER_BYTES")?;
+    number("GLINT_CACHE_MIB")?;
+    number("GLINT_CACHE_MIN_PRIMS")?;
+    number("GLINT_MAX_INPUT_MIB")?;
+    one_of("GLINT_TRAVERSAL", &["ray", "packet"])?;
+    one_of("GLINT_PACKET_SHADOWS", &["0", "1"])
+}
