@@ -98,9 +98,19 @@ fn unpack_rn(mag: u32) -> vec2<i32> {
     return vec2<i32>(i32((mag & 0x7fffffu) | 0x800000u), i32(field));
 }
 
+/// The bits of a quiet NaN and of +infinity, read at run time: WGSL makes a constant
+/// expression whose value is a NaN or an infinity a shader-creation error (Tint applies it).
+var<private> qnan_bits: u32 = 0x7fc00000u;
+var<private> inf_bits: u32 = 0x7f800000u;
+
 /// A quiet NaN.
 fn nan_rn() -> f32 {
-    return bitcast<f32>(0x7fc00000u);
+    return bitcast<f32>(qnan_bits);
+}
+
+/// +infinity.
+fn inf_rn() -> f32 {
+    return bitcast<f32>(inf_bits);
 }
 
 /// `a / b` rounded to nearest, ties to even, as IEEE 754 divides.
@@ -289,7 +299,7 @@ fn pow_det(x: f32, y: f32) -> f32 {
         return 1.0;
     }
     if ym > POW_HUGE_Y {
-        return select(bitcast<f32>(0x7f800000u), 0.0, xm < 0x3f800000u);
+        return select(inf_rn(), 0.0, xm < 0x3f800000u);
     }
     // x = m · 2^k, m in [√½, √2]; a subnormal x normalised by its leading zeros.
     var bits = xm;
@@ -335,7 +345,7 @@ fn pow_det(x: f32, y: f32) -> f32 {
     // 2^(n + f): n by the exponent's bits, 2^f in [0.70, 1.42] by its series.
     let n = round(w_hi);
     if n > 127.0 {
-        return bitcast<f32>(0x7f800000u);
+        return inf_rn();
     }
     if n < -125.0 {
         return 0.0;

@@ -63,6 +63,11 @@ pub fn nan_rn() -> f32 {
     f32::from_bits(0x7fc0_0000)
 }
 
+/// WGSL `inf_rn`: +infinity.
+pub fn inf_rn() -> f32 {
+    f32::INFINITY
+}
+
 /// WGSL `div_rn` under `EXACT_MATH`: `a / b` rounded to nearest, ties to even, from
 /// `approx_div`, the driver's quotient of two floats in [1, 4).
 pub fn div_rn(a: f32, b: f32, approx_div: &mut impl FnMut(f32, f32) -> f32) -> f32 {
@@ -254,7 +259,7 @@ pub fn pow_det(x: f32, y: f32) -> f32 {
         return 1.0;
     }
     if ym > POW_HUGE_Y {
-        return if xm < 0x3f80_0000 { 0.0 } else { f32::INFINITY };
+        return if xm < 0x3f80_0000 { 0.0 } else { inf_rn() };
     }
     // x = m · 2^k, m in [√½, √2]; a subnormal x normalised by its leading zeros.
     let mut bits = xm;
@@ -301,7 +306,7 @@ pub fn pow_det(x: f32, y: f32) -> f32 {
     // 2^(n + f): n by the exponent's bits, 2^f in [0.70, 1.42] by its series.
     let n = w_hi.round_ties_even();
     if n > 127.0 {
-        return f32::INFINITY;
+        return inf_rn();
     }
     if n < -125.0 {
         return 0.0;
