@@ -291,7 +291,7 @@ fn a_broken_scene_shows_its_error_under_the_editor() {
         .unwrap()
         + 1;
     assert!(
-        shown.contains(&format!("scenes/bb8.toml:{line}: fov:")),
+        shown.contains(&format!("scenes/bb8.toml:{line}: camera.fov:")),
         "the error under the editor: {shown:?}"
     );
     let fixed = &s.results["results"]["fixed"];
