@@ -326,6 +326,13 @@ fn scene_diff(gpu: &glint::gpu::Gpu, scene: &Scene, math: MathMode) -> glint::co
     glint::compare::diff(&g, &c)
 }
 
+/// The scenes whose image with fast math must differ from the mirror's.
+const TWINS: [&str; 3] = [
+    "sphere",
+    "suzanne-ply",
+    "vertex grid moller-trumbore at [0.0, 0.0, 0.0]",
+];
+
 #[test]
 fn every_gpu_test_scene_is_the_mirror_under_an_inexact_driver() {
     let Some(gpu) = common::gpu() else { return };
@@ -343,11 +350,13 @@ fn every_gpu_test_scene_is_the_mirror_under_an_inexact_driver() {
         inexact_driver: true,
     };
     let mut fast_differs = Vec::new();
-    for (k, (name, scene)) in scenes().into_iter().enumerate() {
+    for (name, scene) in scenes() {
         let d = scene_diff(gpu, &scene, exact);
         assert!(d.bit_exact(), "{name}, exact math, inexact driver: {d:?}");
-        // The twin, on every fourth scene: the driver's raw (perturbed) results differ.
-        if k % 4 == 0 {
+        // The twin, on scenes that share one pipeline (Möller–Trumbore, no shadows: each
+        // pipeline of the general kernel costs lavapipe about 20 s to compile): the
+        // driver's raw (perturbed) results differ.
+        if TWINS.contains(&name.as_str()) {
             let f = scene_diff(gpu, &scene, fast);
             eprintln!(
                 "{name}: exact = mirror; fast: {} pixels differ in some bit, {} hit/miss",
@@ -356,6 +365,7 @@ fn every_gpu_test_scene_is_the_mirror_under_an_inexact_driver() {
             fast_differs.push(!f.bit_exact());
         }
     }
+    assert_eq!(fast_differs.len(), TWINS.len(), "a twin scene is missing");
     assert!(
         fast_differs.iter().all(|&d| d),
         "fast math gave the mirror's bits: {fast_differs:?}"
