@@ -54,6 +54,7 @@ pub struct ExactSource {
     module: naga::Module,
     info: naga::valid::ModuleInfo,
     options: naga::back::spv::Options<'static>,
+    target: SpirvTarget,
 }
 
 /// What the SPIR-V depends on of the device it is written for.
@@ -213,7 +214,13 @@ impl ExactSource {
             module,
             info,
             options: spv_options(&target),
+            target,
         })
+    }
+
+    /// The device facts the SPIR-V is written for.
+    pub fn target(&self) -> SpirvTarget {
+        self.target
     }
 
     /// The SPIR-V words of entry point `entry` with the override `constants` applied, as

@@ -70,6 +70,11 @@ enum ModuleSource {
 pub struct Kernel {
     flavour: Flavour,
     source: ModuleSource,
+    /// The kernel's WGSL, for [`Kernel::fast_source`].
+    text: String,
+    /// The exact path's module without the corrections ([`super::without_corrections`]),
+    /// parsed on the first pipeline that runs the driver's own division.
+    fast: std::sync::OnceLock<Result<ExactSource, GpuError>>,
     render_layout: wgpu::BindGroupLayout,
     pub(super) rgba8_layout: wgpu::BindGroupLayout,
     query_layout: wgpu::BindGroupLayout,
@@ -285,6 +290,7 @@ impl Kernel {
             ),
             Flavour::PerRay => ("trace.wgsl", SHADER_SOURCE.into()),
         };
+        let kernel_text = text.to_string();
         let exact = ExactSource::new(device, &text)?;
         scoped(device, "shader compilation", || {
             let source = match exact {
@@ -350,6 +356,8 @@ impl Kernel {
                 query_pipeline_layout: pl(&query_layout),
                 bindings,
                 source,
+                text: kernel_text,
+                fast: std::sync::OnceLock::new(),
                 render_layout,
                 rgba8_layout,
                 query_layout,
@@ -357,6 +365,16 @@ impl Kernel {
                 native_rounding: super::rounds_correctly(&device.adapter_info()),
             }
         })
+    }
+
+    /// The exact path's module without the corrections, parsed once on first use.
+    fn fast_source(&self, full: &ExactSource) -> Result<&ExactSource, GpuError> {
+        self.fast
+            .get_or_init(|| {
+                ExactSource::compile(&super::without_corrections(&self.text), full.target())
+            })
+            .as_ref()
+            .map_err(Clone::clone)
     }
 
     /// The pipeline for `spec` and `entry`, compiled now (the time returned) or cached.
@@ -375,9 +393,9 @@ impl Kernel {
             return Ok((p.clone(), Duration::ZERO));
         }
         let t0 = Instant::now();
-        let constants = spec
-            .with_math(spec.math.on_driver(self.native_rounding))
-            .constants();
+        let effective = spec.math.on_driver(self.native_rounding);
+        let uncorrected = effective.math == crate::buffers::Math::Fast && !effective.inexact_driver;
+        let constants = spec.with_math(effective).constants();
         let (entry_point, k) = match entry {
             Entry::Render => ("render", 0),
             Entry::RenderRgba8 => ("render_rgba8", 1),
@@ -387,7 +405,12 @@ impl Kernel {
         // constants; the WGSL path hands them to wgpu.
         let exact_module;
         let (module, constants): (&wgpu::ShaderModule, &[(&str, f64)]) = match &self.source {
-            ModuleSource::Exact(e) => {
+            ModuleSource::Exact(full) => {
+                let e = if uncorrected {
+                    self.fast_source(full)?
+                } else {
+                    full
+                };
                 exact_module = scoped(device, "shader compilation", || {
                     e.module(device, entry_point, &constants, &self.bindings[k])
                 })??;

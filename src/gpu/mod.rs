@@ -29,6 +29,37 @@ pub const SHADER_SOURCE: &str = concat!(
     include_str!("../../shaders/whitted.wgsl"),
 );
 
+/// `text` (a kernel's WGSL, `exact.wgsl` first) with `div_rn` and `sqrt_rn` reduced to the
+/// driver's own operations: the kernel that `--math fast` and a trusted driver's `exact`
+/// run. The same function as the whole text with `EXACT_MATH` off, without the corrections'
+/// dead code at every call site, which costs lavapipe seconds to compile (4.4 s against
+/// 0.3 s for whitted's pipeline).
+pub fn without_corrections(text: &str) -> String {
+    let mut out = text.to_string();
+    for (head, body) in [
+        (
+            "fn div_rn(a: f32, b: f32) -> f32 {\n",
+            "    return approx_div(a, b);\n",
+        ),
+        (
+            "fn sqrt_rn(x: f32) -> f32 {\n",
+            "    return approx_sqrt(x);\n",
+        ),
+    ] {
+        let start = out
+            .find(head)
+            .expect("exact.wgsl defines div_rn and sqrt_rn")
+            + head.len();
+        let end = start
+            + out[start..]
+                .find("\n}\n")
+                .expect("a function ends with `}`")
+            + 1;
+        out.replace_range(start..end, body);
+    }
+    out
+}
+
 /// Why the GPU tracer could not run.
 #[derive(Clone, Debug, thiserror::Error)]
 pub enum GpuError {
