@@ -22,125 +22,46 @@ fn same(a: f32, b: f32) -> bool {
 
 // ---- the WGSL functions on the test GPU --------------------------------------------------
 
-/// A compute shader that applies `div_rn`, `sqrt_rn` and `pow_det` to pairs of bit patterns.
+/// A compute shader that applies `div_rn`, `sqrt_rn` and `pow_det` to pairs of bit patterns
+/// (`x` and `y` of each input; the bits move through f32 loads and stores unchanged).
 const PROBE: &str = r#"
-@group(0) @binding(0) var<storage, read> inputs: array<vec2<u32>>;
-@group(0) @binding(1) var<storage, read_write> outputs: array<vec4<u32>>;
-
 @compute @workgroup_size(64)
-fn probe(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
-    if i >= arrayLength(&inputs) {
+    if i >= arrayLength(&input) {
         return;
     }
-    let a = bitcast<f32>(inputs[i].x);
-    let b = bitcast<f32>(inputs[i].y);
-    outputs[i] = vec4<u32>(
+    let a = input[i].x;
+    let b = input[i].y;
+    output[i] = bitcast<vec4<f32>>(vec4<u32>(
         bitcast<u32>(div_rn(a, b)),
         bitcast<u32>(sqrt_rn(a)),
         bitcast<u32>(pow_det(a, b)),
         0u,
-    );
+    ));
 }
 "#;
 
 /// `div_rn`, `sqrt_rn` and `pow_det` of each pair on the GPU, with the math mode's constants.
 fn probe_gpu(gpu: &glint::gpu::Gpu, pairs: &[[u32; 2]], math: MathMode) -> Vec<[u32; 4]> {
-    use wgpu::util::DeviceExt;
-    let device = &gpu.device;
-    let source = format!("{}{PROBE}", include_str!("../shaders/exact.wgsl"));
+    let source = format!(
+        "{}{}{PROBE}",
+        include_str!("../shaders/exact.wgsl"),
+        common::PROBE_BINDINGS
+    );
     let b = |x: bool| if x { 1.0 } else { 0.0 };
     let constants = [
         ("EXACT_MATH", b(math.math != Math::Fast)),
         ("INEXACT_DRIVER", b(math.inexact_driver)),
     ];
-    // The kernel's own path to the driver: SPIR-V with every float result NoContraction
-    // (plain WGSL would let the driver fuse the exact products).
-    let exact = glint::gpu::exact::ExactSource::new(device, &source)
-        .expect("probe source")
-        .expect("the test GPU takes SPIR-V");
-    let module = exact
-        .module(device, "probe", &constants, &[0, 1])
-        .expect("probe module");
-    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("exact probe"),
-        entries: &[entry(0, true), entry(1, false)],
-    });
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("exact probe"),
-        bind_group_layouts: &[Some(&group_layout)],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("exact probe"),
-        layout: Some(&layout),
-        module: &module,
-        entry_point: Some("probe"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let size = (pairs.len() * 16) as u64;
-    let input = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("inputs"),
-        contents: bytemuck::cast_slice(pairs),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let output = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("outputs"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("staging"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &group_layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: output.as_entire_binding(),
-            },
-        ],
-    });
-    let mut enc = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups((pairs.len() as u32).div_ceil(64), 1, 1);
-    }
-    enc.copy_buffer_to_buffer(&output, 0, &staging, 0, size);
-    gpu.queue.submit([enc.finish()]);
-    let slice = staging.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |r| r.expect("map"));
-    device
-        .poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        })
-        .expect("poll");
-    let out: Vec<[u32; 4]> =
-        bytemuck::cast_slice(&slice.get_mapped_range().expect("mapped")).to_vec();
-    out
+    let input: Vec<[f32; 4]> = pairs
+        .iter()
+        .map(|p| [f32::from_bits(p[0]), f32::from_bits(p[1]), 0.0, 0.0])
+        .collect();
+    common::run_probe_with(gpu, &source, &constants, &input, pairs.len(), pairs.len())
+        .into_iter()
+        .map(|o| o.map(f32::to_bits))
+        .collect()
 }
 
 /// Pairs for the GPU: every special against every special, then random bit patterns and

@@ -157,16 +157,38 @@ pub fn run_probe(
     out_len: usize,
     invocations: usize,
 ) -> Vec<[f32; 4]> {
+    run_probe_with(gpu, src, &[], input, out_len, invocations)
+}
+
+/// [`run_probe`] with the shader's override `constants` set.
+pub fn run_probe_with(
+    gpu: &Gpu,
+    src: &str,
+    constants: &[(&str, f64)],
+    input: &[[f32; 4]],
+    out_len: usize,
+    invocations: usize,
+) -> Vec<[f32; 4]> {
     let d = &gpu.device;
     // The probe reaches the driver as the kernel does: NoContraction SPIR-V where the
-    // device takes it (glint::gpu::exact), else WGSL.
-    let module = match glint::gpu::exact::ExactSource::new(d, src).expect("probe compiles") {
-        Ok(exact) => exact.module(d, "main", &[], &[0, 1]).expect("probe module"),
-        Err(_) => d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: None,
-            source: wgpu::ShaderSource::Wgsl(src.into()),
-        }),
-    };
+    // device takes it (glint::gpu::exact), specialised while written; else WGSL, with the
+    // constants given to the pipeline.
+    let (module, pipeline_constants) =
+        match glint::gpu::exact::ExactSource::new(d, src).expect("probe compiles") {
+            Ok(exact) => (
+                exact
+                    .module(d, "main", constants, &[0, 1])
+                    .expect("probe module"),
+                &[][..],
+            ),
+            Err(_) => (
+                d.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: None,
+                    source: wgpu::ShaderSource::Wgsl(src.into()),
+                }),
+                constants,
+            ),
+        };
     let entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -191,7 +213,10 @@ pub fn run_probe(
         layout: Some(&layout),
         module: &module,
         entry_point: Some("main"),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: pipeline_constants,
+            zero_initialize_workgroup_memory: false,
+        },
         cache: None,
     });
     let inb = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
