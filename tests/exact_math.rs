@@ -307,14 +307,7 @@ fn glint_compare(scene: &str, extra: &[&str]) -> (Option<i32>, String) {
         c.args(["--adapter", &adapter]);
     }
     let o = c.output().unwrap();
-    (
-        o.status.code(),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
+    common::status_and_text(&o)
 }
 
 #[test]

@@ -95,14 +95,7 @@ fn run_diff(
         .args(extra)
         .output()
         .unwrap();
-    (
-        o.status.code(),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
+    common::status_and_text(&o)
 }
 
 #[test]

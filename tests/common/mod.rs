@@ -42,6 +42,18 @@ impl Drop for Scratch {
     }
 }
 
+/// A finished command's exit status and its standard output followed by its standard error.
+pub fn status_and_text(o: &std::process::Output) -> (Option<i32>, String) {
+    (
+        o.status.code(),
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        ),
+    )
+}
+
 /// A command that runs the `glint` binary the way this test process runs: through
 /// `GLINT_LAVAPIPE_LOADER` where `.ci/lavapipe.sh 26` set one (a driver built for a newer
 /// C library than the system's runs only through its own dynamic loader, and a child
