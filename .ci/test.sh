@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# glint's test command (README: "Run the tests").
+# glint's test command (README, "On a fresh machine"; each pass in docs/testing.md).
 #
 # 1. On a machine with no Vulkan driver it installs Mesa's lavapipe (a CPU Vulkan) first.
 # 2. fmt, clippy -D warnings, then the whole suite on the system's lavapipe (with Xvfb and

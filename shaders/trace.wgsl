@@ -6,7 +6,7 @@
 // ---- the camera ------------------------------------------------------------------------
 
 /// The primary ray through the point (dx, dy) of pixel (i, j), each in [0, 1) from its
-/// top-left corner; the README's camera formula, left to right (the centre is (0.5, 0.5)).
+/// top-left corner; the camera formula of docs/scene-format.md, left to right (the centre is (0.5, 0.5)).
 fn camera_ray(i: u32, j: u32, dx: f32, dy: f32) -> Ray {
     let x = (div_rn(f32(i) + dx, f32(params.width)) * 2.0 - 1.0) * params.tan_half * params.aspect;
     let y = (1.0 - div_rn(f32(j) + dy, f32(params.height)) * 2.0) * params.tan_half;
@@ -317,7 +317,7 @@ fn spot_factor(light: Light, c: f32) -> f32 {
     return s * s * (3.0 - 2.0 * s);
 }
 
-/// The Phong model (README, "Scene format") at a hit: I = Ia·ka + Σ Ip·kd·max(0, N·L) + Ip·ks·max(0, R·V)^n,
+/// The Phong model (docs/scene-format.md) at a hit: I = Ia·ka + Σ Ip·kd·max(0, N·L) + Ip·ks·max(0, R·V)^n,
 /// each term only if the material's model has it, clamped to [0, 1]. A term below the
 /// smallest normal f32 is 0 (`flush`), so that drivers that flush subnormals agree.
 fn shade(ray: Ray, hit: Hit) -> vec3<f32> {

@@ -58,7 +58,7 @@ pub fn exponent_as_int(n: f32) -> i32 {
     }
 }
 
-/// The camera basis of the scene format (README, "Scene format") in f32, evaluated left to right: (forward, right, up').
+/// The camera basis of the scene format (docs/scene-format.md, "Camera, shading, mirrors and glass") in f32, evaluated left to right: (forward, right, up').
 pub fn camera_basis(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> [[f32; 3]; 3] {
     use crate::shared::real::V3;
     crate::shared::real::camera_basis::<f32>(V3::from(eye), V3::from(look_at), V3::from(up))

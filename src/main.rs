@@ -17,6 +17,7 @@ use cli::progress::ProgressBar;
 use glint::cache::Cache;
 use glint::render::{Event, Job, Output};
 use glint::scene::Scene;
+use glint::scene::set::Setting;
 use glint::{RenderOptions, Renderer};
 
 fn main() {
@@ -76,10 +77,14 @@ fn run(cli: Cli) -> Result<Verdict> {
             quiet,
             backend,
             no_cache,
+            encoding,
             frame,
-            common,
+            mut common,
         } => {
             let output = output.unwrap_or_else(|| default_output(&scene));
+            if let Some(e) = encoding {
+                common.set.push(format!("output.encoding={e}").parse()?);
+            }
             done(render(
                 &scene,
                 &output,
@@ -90,7 +95,11 @@ fn run(cli: Cli) -> Result<Verdict> {
                 common,
             ))
         }
-        Command::Check { scenes, confine } => check(&scenes, confine),
+        Command::Check {
+            scenes,
+            confine,
+            set,
+        } => check(&scenes, confine, &set),
         Command::Compare {
             scene,
             frame,
@@ -127,6 +136,7 @@ fn run(cli: Cli) -> Result<Verdict> {
                 max_input_bytes: max_input_bytes(),
                 confine: common.confine,
                 cache: None,
+                settings: common.set,
             },
         })),
         Command::Bench {
@@ -158,21 +168,38 @@ fn run(cli: Cli) -> Result<Verdict> {
                 samples,
                 max_depth,
                 &options,
-                common.confine,
+                &load_options(common.confine, None, &common.set),
                 &out,
             ))
         }
     }
 }
 
-/// The scene at `path`, read with the command line's limits and `cache`.
-fn load(path: &Path, confine: bool, cache: Option<Arc<Cache>>) -> Result<Scene> {
-    let options = glint::scene::LoadOptions {
+/// The scene at `path`, read with the command line's limits, `cache` and `--set`
+/// settings.
+fn load(
+    path: &Path,
+    confine: bool,
+    cache: Option<Arc<Cache>>,
+    settings: &[Setting],
+) -> Result<Scene> {
+    Ok(Scene::load_with(
+        path,
+        &load_options(confine, cache, settings),
+    )?)
+}
+
+fn load_options(
+    confine: bool,
+    cache: Option<Arc<Cache>>,
+    settings: &[Setting],
+) -> glint::scene::LoadOptions {
+    glint::scene::LoadOptions {
         max_input_bytes: max_input_bytes(),
         confine,
         cache,
-    };
-    Ok(Scene::load_with(path, &options)?)
+        settings: settings.to_vec(),
+    }
 }
 
 /// Waits, when dropped, for the cache's entries still being written behind, so that the
@@ -216,10 +243,10 @@ struct Chatter {
 
 /// `glint check`: each scene read and validated as `render` reads it; the first error of
 /// each is printed, and the status is 1 when any scene is bad.
-fn check(scenes: &[PathBuf], confine: bool) -> Result<Verdict> {
+fn check(scenes: &[PathBuf], confine: bool, settings: &[Setting]) -> Result<Verdict> {
     let mut bad = 0;
     for path in scenes {
-        match load(path, confine, None) {
+        match load(path, confine, None, settings) {
             Ok(scene) => {
                 for w in &scene.warnings {
                     eprintln!("warning: {w}");
@@ -267,7 +294,7 @@ fn render(
     let _finish = FinishWrites(cache.clone());
     // Before any work: the folder exists and a file can be made there.
     let output = Output::file(output)?;
-    let scene = load(scene, common.confine, cache)?;
+    let scene = load(scene, common.confine, cache, &common.set)?;
     let renderer = Renderer::with_options(backend, &gpu_options(common.adapter.as_deref()))?;
     let bar = ProgressBar::new(Instant::now());
     let Chatter { verbose, quiet } = chatter;
@@ -309,7 +336,7 @@ fn compare(
     tolerance: glint::compare::Tolerance,
 ) -> Result<Verdict> {
     glint::image::check_extension(diff)?;
-    let s = load(scene, common.confine, None)?;
+    let s = load(scene, common.confine, None, &common.set)?;
     let gpu = glint::gpu::Gpu::with_options(&gpu_options(common.adapter.as_deref()))?;
     let report = glint::render::compare(&s, &options(frame), &gpu)?;
     for w in &report.warnings {
@@ -414,33 +441,34 @@ fn bench(
     samples: Option<u32>,
     max_depth: Option<u32>,
     options: &glint::bench::Options,
-    confine: bool,
+    load: &glint::scene::LoadOptions,
     out: &Path,
 ) -> Result<()> {
     if cfg!(debug_assertions) {
         eprintln!("warning: a debug build: build with --release for figures that mean anything");
     }
-    let paths = if scenes.is_empty() {
-        ["sphere", "triangle", "umbrella", "bb8", "mitsubishi"]
-            .iter()
-            .map(|s| PathBuf::from(format!("scenes/{s}.toml")))
-            .collect()
-    } else {
-        scenes
-    };
     let mut list = Vec::new();
-    for p in &paths {
-        let name = p
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let mut s = load(p, confine, None)?;
+    let mut add = |name: String, mut s: Scene| {
         for w in &s.warnings {
             eprintln!("warning: {w}");
         }
         s.camera.samples = samples.unwrap_or(s.camera.samples);
         s.max_depth = max_depth.unwrap_or(s.max_depth);
         list.push((name, s));
+    };
+    if scenes.is_empty() {
+        // The seed scenes as shipped in the binary: `glint bench` works from any folder.
+        for (name, text) in glint::bench::SEED_SCENES {
+            let path = PathBuf::from(format!("scenes/{name}.toml"));
+            add(name.to_string(), Scene::parse_options(text, &path, load)?);
+        }
+    }
+    for p in &scenes {
+        let name = p
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        add(name, Scene::load_with(p, load)?);
     }
     let report = glint::bench::run(&list, options, &mut |done, total, label| {
         let width = 30;

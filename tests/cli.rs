@@ -226,3 +226,184 @@ fn a_bad_environment_value_is_named() {
         .unwrap();
     assert!(o.status.success(), "{}", text(&o).1);
 }
+
+/// `--set`: a key changed before the scene is read, a new key added, errors naming the
+/// file's own line and, where the value at fault was set, the argument.
+#[test]
+fn set_changes_keys_and_errors_keep_the_files_lines() {
+    let d = common::Scratch::new("cli-set");
+    std::fs::write(d.join("s.toml"), SCENE).unwrap();
+    let size = |args: &[&str]| {
+        let mut all = vec!["render", "s.toml", "--backend", "cpu", "-q", "-o", "o.exr"];
+        all.extend_from_slice(args);
+        let o = glint(&d, &all);
+        assert!(o.status.success(), "{}", text(&o).1);
+        let img = glint::image::Image::load(&d.join("o.exr")).unwrap();
+        (img.width, img.height, img)
+    };
+    // The twin of each: without --set the scene's own values.
+    let (w, h, plain) = size(&[]);
+    assert_eq!((w, h), (32, 24));
+    let (w, h, _) = size(&["--set", "camera.width=16", "--set", "camera.height=8"]);
+    assert_eq!((w, h), (16, 8));
+    // A new key (the camera has no `samples`) and a changed colour change the image.
+    let (_, _, aa) = size(&["--set", "camera.samples=2"]);
+    assert_ne!(aa.pixels, plain.pixels);
+    let (_, _, red) = size(&["--set", "lights[0].color=[1,0,0]"]);
+    // Red light: no pixel gains green, and the lit ones lose it.
+    let pairs = || red.pixels.iter().zip(&plain.pixels);
+    assert!(pairs().all(|(r, p)| r[1] <= p[1]));
+    assert!(pairs().any(|(r, p)| r[1] < p[1]));
+
+    let err = |args: &[&str]| {
+        let mut all = vec!["check", "s.toml"];
+        all.extend_from_slice(args);
+        let o = glint(&d, &all);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        text(&o).1
+    };
+    // The value at fault was set: the file's line of the key, and the argument.
+    let e = err(&[
+        "--set",
+        "camera.samples=2",
+        "--set",
+        "materials.m.kd=[2e6,0,0]",
+    ]);
+    assert!(
+        e.contains("s.toml:13: materials.m.kd:")
+            && e.contains("(set by --set materials.m.kd=[2e6,0,0])"),
+        "{e}"
+    );
+    // A fault of the file's own, below an inserted line: still the file's line, no argument.
+    std::fs::write(
+        d.join("bad.toml"),
+        SCENE.replace("radius = 1.0", "radius = -1.0"),
+    )
+    .unwrap();
+    let o = glint(
+        &d,
+        &[
+            "check",
+            "bad.toml",
+            "--set",
+            "camera.samples=2",
+            "--set",
+            "shadows=true",
+        ],
+    );
+    let (_, e) = text(&o);
+    assert!(
+        e.contains("bad.toml:16: spheres[0].radius:") && !e.contains("--set"),
+        "{e}"
+    );
+    // Paths that do not exist, and arguments that are not settings.
+    let e = err(&["--set", "lights[1].color=[1,0,0]"]);
+    assert!(
+        e.contains("--set lights[1].color=[1,0,0]: lights has 1 entry"),
+        "{e}"
+    );
+    let o = glint(&d, &["check", "s.toml", "--set", "camera.fov"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "a malformed --set is a usage error"
+    );
+    // A word is a string: an unknown encoding is named with its key.
+    let e = err(&["--set", "output.encoding=rgb"]);
+    assert!(
+        e.contains("output.encoding") && e.contains("\"rgb\""),
+        "{e}"
+    );
+}
+
+/// `--encoding srgb` (or `[output] encoding`) writes the sRGB curve's bytes, exactly the
+/// library's table applied to the f32 image, and says so in the PNG; linear stays linear.
+#[test]
+fn srgb_encoding_is_the_curve_of_the_exr() {
+    use glint::image::Encoding;
+    let d = common::Scratch::new("cli-encoding");
+    std::fs::write(d.join("s.toml"), SCENE).unwrap();
+    let run = |args: &[&str]| {
+        let mut all = vec!["render", "s.toml", "--backend", "cpu", "-q"];
+        all.extend_from_slice(args);
+        let o = glint(&d, &all);
+        assert!(o.status.success(), "{}", text(&o).1);
+    };
+    run(&["-o", "s.exr"]);
+    run(&["-o", "srgb.png", "--encoding", "srgb"]);
+    run(&["-o", "set.png", "--set", "output.encoding=srgb"]);
+    run(&["-o", "linear.png"]);
+    let exr = glint::image::Image::load(&d.join("s.exr")).unwrap();
+    let png = |name: &str| image::open(d.join(name)).unwrap().to_rgb8().into_raw();
+    assert_eq!(png("srgb.png"), exr.to_rgb8_encoded(Encoding::Srgb));
+    assert_eq!(png("set.png"), png("srgb.png"));
+    // The twin: the linear PNG is the plain quantisation, and it is not the sRGB one.
+    assert_eq!(png("linear.png"), exr.to_rgb8());
+    assert_ne!(png("linear.png"), png("srgb.png"));
+    let info = |name: &str| {
+        let f = std::fs::File::open(d.join(name)).unwrap();
+        png::Decoder::new(std::io::BufReader::new(f))
+            .read_info()
+            .unwrap()
+            .info()
+            .srgb
+    };
+    assert!(info("srgb.png").is_some());
+    assert!(info("linear.png").is_none());
+}
+
+/// `glint bench` with no scene measures the seed scenes shipped in the binary, from any
+/// folder.
+#[test]
+fn bench_without_scenes_works_anywhere() {
+    let d = common::Scratch::new("cli-bench-anywhere");
+    let o = glint(
+        &d,
+        &[
+            "bench",
+            "--no-gpu",
+            "--runs",
+            "1",
+            "--size",
+            "16x12",
+            "--triangle",
+            "naive",
+            "--out",
+            "out",
+        ],
+    );
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    for name in ["sphere", "triangle", "umbrella", "bb8", "mitsubishi"] {
+        assert!(out.contains(name), "{name} missing: {out}");
+    }
+    assert!(d.join("out/report.json").is_file());
+}
+
+/// `glint view` without a display says what is missing, never a path in winit's sources.
+#[test]
+fn view_without_a_display_says_so() {
+    let d = common::Scratch::new("cli-view-nodisplay");
+    std::fs::write(d.join("s.toml"), SCENE).unwrap();
+    let view = |display: Option<&str>| {
+        let mut c = common::glint_command();
+        c.current_dir(&*d)
+            .args(["view", "s.toml", "--backend", "cpu"]);
+        c.env_remove("WAYLAND_DISPLAY");
+        match display {
+            Some(x) => c.env("DISPLAY", x),
+            None => c.env_remove("DISPLAY"),
+        };
+        let o = c.output().unwrap();
+        assert_eq!(o.status.code(), Some(1));
+        text(&o).1
+    };
+    let e = view(None);
+    assert!(
+        e.contains("DISPLAY is not set") && e.contains("Xvfb"),
+        "{e}"
+    );
+    let e = view(Some(":97"));
+    assert!(e.contains("cannot open a window on display \":97\""), "{e}");
+    assert!(!e.contains(".cargo") && !e.contains(".rs:"), "{e}");
+}

@@ -1,4 +1,4 @@
-//! Known answers on the CPU tracers, computed by hand from the README's formulas ("Scene format").
+//! Known answers on the CPU tracers, computed by hand from the formulas of docs/scene-format.md.
 
 mod common;
 

@@ -1,7 +1,8 @@
 //! The README's seed-scene images are what the code renders now: each PNG in `docs/images/`
 //! equals, byte for byte after decoding, the CPU tracer's image of its scene (the GPU's on
 //! lavapipe, which `tests/gpu_vs_cpu.rs` proves equal). Regenerate them with
-//! `cargo run --release -- render scenes/NAME.toml -o docs/images/NAME.png --backend cpu`.
+//! `cargo run --release -- render scenes/NAME.toml -o docs/images/NAME.png --backend cpu`
+//! (each in its scene's `[output] encoding`: the textured scene's is sRGB).
 
 mod common;
 
@@ -12,7 +13,7 @@ fn rendered(name: &str) -> (u32, u32, Vec<u8>) {
     let (w, h) = scene.size();
     let buf = SceneBuffers::new(&scene, w, h, scene.triangle);
     let img = glint::cpu::render_f32(&buf, Specialisation::for_scene(&buf));
-    (w, h, img.to_rgb8())
+    (w, h, img.to_rgb8_encoded(scene.encoding))
 }
 
 fn committed(name: &str) -> (u32, u32, Vec<u8>) {

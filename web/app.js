@@ -1,7 +1,7 @@
 // The page: asks glint-web (the wasm module) and draws what it answers. The work is the
 // library's; this file fetches files, shows images, errors and the verdict.
 //
-// Contract for tests and embedders (README, "glint in the browser"):
+// Contract for tests and embedders (docs/features.md, "glint in the browser"):
 //   await window.glintReady;
 //   await window.glint.render(tomlText, { backend: "gpu" | "cpu", path })
 //     -> { width, height, rgba: Uint8Array, ms }   (rgba: the bytes of `glint render`'s PNG,

@@ -61,6 +61,7 @@ pub fn from_scene_error(py: Python<'_>, e: &glint::scene::SceneError, dict_sourc
         E::Syntax { file, .. }
         | E::Invalid { file, .. }
         | E::Value { file, .. }
+        | E::Set { file, .. }
         | E::Mesh { file, .. } => scene_error(
             py,
             e.to_string(),

@@ -61,6 +61,11 @@ pub struct CommonArgs {
     /// Read only files below the scene's own folder (meshes, MTLs; links followed).
     #[arg(long)]
     pub confine: bool,
+    /// Change a key of the scene before it is read: a dotted TOML path and a TOML value
+    /// (camera.fov=30, lights[0].color=[1,0,0], output.encoding=srgb; a word is a string).
+    /// Repeatable; applied in order.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<glint::scene::set::Setting>,
 }
 
 /// The frame options of `render` and `compare`.
@@ -132,6 +137,10 @@ pub enum Command {
         /// Which tracer.
         #[arg(long, value_enum, default_value = "auto")]
         backend: Backend,
+        /// A PNG's bytes: linear or srgb (the sRGB curve); default: the scene's
+        /// `[output] encoding`, else linear. Short for `--set output.encoding=...`.
+        #[arg(long, value_parser = ["linear", "srgb"])]
+        encoding: Option<String>,
         /// Neither read nor write the cache of large meshes and BVHs (kept in
         /// GLINT_CACHE_DIR, else $XDG_CACHE_HOME/glint or ~/.cache/glint).
         #[arg(long)]
@@ -197,6 +206,9 @@ pub enum Command {
         /// Read only files below each scene's own folder (meshes, MTLs; links followed).
         #[arg(long)]
         confine: bool,
+        /// Change a key of each scene before it is read (see `render --set`).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<glint::scene::set::Setting>,
     },
     /// List the Vulkan adapters, best first, with their drivers and versions.
     Adapters,
@@ -219,7 +231,7 @@ pub enum Command {
     /// Speed against error: every scene × tracer × triangle algorithm, with a warm-up and
     /// timed runs; writes report.md, report.json and plot.png to --out.
     Bench {
-        /// Scene files (default: the five seed scenes in scenes/).
+        /// Scene files (default: the five seed scenes, as shipped with glint).
         scenes: Vec<PathBuf>,
         /// Image size WxH (default 1024x768).
         #[arg(long, value_parser = parse_size, default_value = "1024x768")]

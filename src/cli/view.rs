@@ -74,16 +74,43 @@ enum UserEvent {
     Changed,
 }
 
+/// `message` without the source location that winit's `OsError` prints ("os error at
+/// FILE:LINE: "), a path inside winit's own sources that tells a user nothing.
+fn without_source_location(message: &str) -> String {
+    match message.find("os error at ") {
+        Some(i) => match message[i..].find(": ") {
+            Some(j) => format!("{}{}", &message[..i], &message[i + j + 2..]),
+            None => message.to_owned(),
+        },
+        None => message.to_owned(),
+    }
+}
+
 /// Opens the window and runs until it is closed (or `--frames` are drawn).
 pub fn run(opts: Options) -> Result<()> {
     let scene = load(&opts)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
+    // The window is X11's on Linux and the BSDs (the build's one windowing backend there).
+    if cfg!(all(unix, not(target_os = "macos")))
+        && std::env::var_os("DISPLAY").is_none_or(|d| d.is_empty())
+    {
+        bail!(
+            "glint view needs an X11 display and DISPLAY is not set (a Wayland desktop \
+             provides one through XWayland; without a screen, run it under Xvfb: \
+             xvfb-run glint view ...)"
+        );
+    }
     let event_loop = EventLoop::<UserEvent>::with_user_event()
         .build()
         .map_err(|e| {
-            anyhow!("cannot open a window: {e} (no display? set DISPLAY, or run under Xvfb)")
+            anyhow!(
+                "cannot open a window on display {:?}: {} (is an X server running there? \
+                 without a screen, run it under Xvfb: xvfb-run glint view ...)",
+                std::env::var("DISPLAY").unwrap_or_default(),
+                without_source_location(&e.to_string())
+            )
         })?;
     let proxy = event_loop.create_proxy();
     let watch = Watch::new(proxy)?;

@@ -392,7 +392,7 @@ pub fn spot_factor<R: Real>(light: &Light, c: R) -> R {
     s * s * (two + R::ONE - two * s)
 }
 
-/// WGSL `shade`: the Phong model (README, "Scene format") at a hit, each term only where the model has it.
+/// WGSL `shade`: the Phong model (docs/scene-format.md) at a hit, each term only where the model has it.
 pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
     let m: &Material = &g.buf.materials[prim_material(g, hit) as usize];
     let a = super::texture::albedo(g, hit, m);

@@ -1,8 +1,10 @@
 //! Images: linear f32 RGB plus the hit distance per pixel, 8-bit output, and PNG files
 //! written so that an interrupted render never leaves half an image.
 
+mod encoding;
 mod exr;
 
+pub use encoding::{Encoding, SRGB_THRESHOLDS, UnknownEncoding, to_u8_srgb};
 pub use exr::ExrStream;
 
 use std::path::{Path, PathBuf};
@@ -59,6 +61,16 @@ fn rgb8(pixels: &[[f32; 4]]) -> Vec<u8> {
     rgb_bytes(pixels, |p| [to_u8(p[0]), to_u8(p[1]), to_u8(p[2])])
 }
 
+/// The 8-bit RGB bytes of `[r, g, b, t]` pixels encoded as `encoding` says.
+fn encoded(pixels: &[[f32; 4]], encoding: Encoding) -> Vec<u8> {
+    match encoding {
+        Encoding::Linear => rgb8(pixels),
+        Encoding::Srgb => rgb_bytes(pixels, |p| {
+            [to_u8_srgb(p[0]), to_u8_srgb(p[1]), to_u8_srgb(p[2])]
+        }),
+    }
+}
+
 /// Three bytes a pixel, `rgb` of each, written in parallel chunks into one buffer.
 fn rgb_bytes<P: Sync>(pixels: &[P], rgb: impl Fn(&P) -> [u8; 3] + Sync) -> Vec<u8> {
     use rayon::prelude::*;
@@ -97,9 +109,14 @@ impl Image {
         self.height = height;
     }
 
-    /// The 8-bit RGB bytes, as written to the PNG.
+    /// The 8-bit RGB bytes, as written to a linear PNG.
     pub fn to_rgb8(&self) -> Vec<u8> {
         rgb8(&self.pixels)
+    }
+
+    /// The 8-bit RGB bytes, as written to a PNG encoded as `encoding` says.
+    pub fn to_rgb8_encoded(&self, encoding: Encoding) -> Vec<u8> {
+        encoded(&self.pixels, encoding)
     }
 
     /// Whether some pixel's colour differs from another's (a blank image has one colour).
@@ -115,7 +132,12 @@ impl Image {
 
     /// Writes a PNG: to a temporary file beside `path`, then renamed over it.
     pub fn save_png(&self, path: &Path) -> Result<(), ImageError> {
-        let mut s = PngStream::create(path, self.width, self.height)?;
+        self.save_png_encoded(path, Encoding::Linear)
+    }
+
+    /// [`Image::save_png`] with the bytes encoded as `encoding` says.
+    pub fn save_png_encoded(&self, path: &Path, encoding: Encoding) -> Result<(), ImageError> {
+        let mut s = PngStream::create_encoded(path, self.width, self.height, encoding)?;
         s.write_rows(&self.pixels)?;
         s.finish()
     }
@@ -137,11 +159,23 @@ pub struct PngStream {
     writer: Option<png::StreamWriter<'static, std::io::BufWriter<std::fs::File>>>,
     rows_left: u32,
     width: u32,
+    encoding: Encoding,
 }
 
 impl PngStream {
     /// Starts `path` (a `.png`) for a `width`×`height` RGB image.
     pub fn create(path: &Path, width: u32, height: u32) -> Result<PngStream, ImageError> {
+        PngStream::create_encoded(path, width, height, Encoding::Linear)
+    }
+
+    /// [`PngStream::create`] for bytes encoded as `encoding` says (an sRGB PNG carries the
+    /// `sRGB` chunk).
+    pub fn create_encoded(
+        path: &Path,
+        width: u32,
+        height: u32,
+        encoding: Encoding,
+    ) -> Result<PngStream, ImageError> {
         if format_of(path)? != Format::Png {
             return Err(ImageError::Extension(path.to_owned()));
         }
@@ -161,6 +195,9 @@ impl PngStream {
         e.set_color(png::ColorType::Rgb);
         e.set_depth(png::BitDepth::Eight);
         e.set_compression(PNG_COMPRESSION);
+        if encoding == Encoding::Srgb {
+            e.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        }
         let writer = e
             .write_header()
             .and_then(|w| w.into_stream_writer())
@@ -172,12 +209,19 @@ impl PngStream {
             writer: Some(writer),
             rows_left: height,
             width,
+            encoding,
         })
     }
 
     /// Appends whole rows (`[r, g, b, t]` pixels, as [`Image::pixels`]), top to bottom.
     pub fn write_rows(&mut self, pixels: &[[f32; 4]]) -> Result<(), ImageError> {
-        self.write_bytes(&rgb8(pixels), pixels.len())
+        let bytes = encoded(pixels, self.encoding);
+        self.write_bytes(&bytes, pixels.len())
+    }
+
+    /// How the bytes encode the linear image.
+    pub fn encoding(&self) -> Encoding {
+        self.encoding
     }
 
     /// Appends the RGB `bytes` of `pixels` pixels (whole rows).
@@ -195,7 +239,13 @@ impl PngStream {
 
     /// Appends whole rows of packed pixels (`pack_rgba8`: red in the lowest byte), top to
     /// bottom: the lean frame's readback, written as it came.
+    /// Only for a linear PNG: packed bytes are linear already.
     pub fn write_rgba8_rows(&mut self, pixels: &[u32]) -> Result<(), ImageError> {
+        assert_eq!(
+            self.encoding,
+            Encoding::Linear,
+            "packed rows are linear bytes: an sRGB PNG takes f32 rows"
+        );
         let bytes = rgb_bytes(pixels, |p| {
             let [r, g, b, _] = p.to_le_bytes();
             [r, g, b]

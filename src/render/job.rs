@@ -11,7 +11,7 @@ use super::output::{Output, Sink};
 use super::renderer::{RenderError, RenderOptions, Renderer, Tracer, TracerKind};
 use crate::buffers::{SceneBuffers, Specialisation};
 use crate::gpu::{Gpu, GpuError, GpuTimings};
-use crate::image::{Image, ImageError};
+use crate::image::{Encoding, Image, ImageError};
 use crate::scene::{Scene, TriangleAlgorithm};
 
 /// Rows per band of the GPU: large, since each dispatch and readback has a fixed cost (about
@@ -313,7 +313,7 @@ impl<'a> Job<'a> {
         if let Some(note) = renderer.note() {
             run.note(Note::Backend(note.to_string()));
         }
-        let mut sink = Sink::open(&output, w, h)?;
+        let mut sink = Sink::open(&output, w, h, scene.encoding)?;
         let math = options.math_mode();
         let traced = trace(renderer, scene, &mut buf, math, &mut sink, &mut run)?;
         if run.cancelled() {
@@ -497,15 +497,16 @@ fn gpu_bands(
         (run.events)(Event::Rows { done, total: h });
     };
     let t = match sink {
-        Sink::Png(png) => kernel.render_bands_rgba8_releasing(
-            &gpu.device,
-            &gpu.queue,
-            buf,
-            spec,
-            band,
-            &mut |y, px| rows(y, px.len(), &mut || png.write_rgba8_rows(px)),
-        ),
-        Sink::Exr(..) | Sink::Frame(..) => {
+        Sink::Png(png) if png.encoding() == Encoding::Linear => kernel
+            .render_bands_rgba8_releasing(
+                &gpu.device,
+                &gpu.queue,
+                buf,
+                spec,
+                band,
+                &mut |y, px| rows(y, px.len(), &mut || png.write_rgba8_rows(px)),
+            ),
+        Sink::Png(..) | Sink::Exr(..) | Sink::Frame(..) => {
             kernel.render_bands(&gpu.device, &gpu.queue, buf, spec, band, &mut |y, px| {
                 rows(y, px.len(), &mut || sink.write_rows(px))
             })

@@ -2,14 +2,15 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::image::{ExrStream, Format, Image, ImageError, PngStream};
+use crate::image::{Encoding, ExrStream, Format, Image, ImageError, PngStream};
 
 /// Where a render's pixels go.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Output {
     /// An 8-bit RGB PNG, written band by band as the rows come: memory stays one band,
-    /// whatever the frame's size. The GPU packs the bytes itself (a quarter of the
-    /// readback).
+    /// whatever the frame's size. Its bytes are encoded as the scene's
+    /// [`crate::scene::Scene::encoding`] says; for a linear PNG the GPU packs the bytes
+    /// itself (a quarter of the readback).
     Png(PathBuf),
     /// An OpenEXR file, the f32 image exactly with the hit distance t in alpha, written row
     /// by row as the rows come (uncompressed, [`crate::image::ExrStream`]): memory stays
@@ -61,10 +62,17 @@ pub(crate) enum Sink {
 }
 
 impl Sink {
-    /// Opens `output` for a `w`×`h` frame.
-    pub(crate) fn open(output: &Output, w: u32, h: u32) -> Result<Sink, ImageError> {
+    /// Opens `output` for a `w`×`h` frame, a PNG's bytes encoded as `encoding` says.
+    pub(crate) fn open(
+        output: &Output,
+        w: u32,
+        h: u32,
+        encoding: Encoding,
+    ) -> Result<Sink, ImageError> {
         Ok(match output {
-            Output::Png(path) => Sink::Png(Box::new(PngStream::create(path, w, h)?)),
+            Output::Png(path) => {
+                Sink::Png(Box::new(PngStream::create_encoded(path, w, h, encoding)?))
+            }
             Output::Exr(path) => Sink::Exr(Box::new(ExrStream::create(path, w, h)?)),
             Output::Memory => Sink::Frame(Image::new(w, h, [0.0; 4]), 0),
         })

@@ -49,6 +49,14 @@ pub enum SceneError {
         /// What is wrong and what is allowed.
         message: String,
     },
+    /// A `--set` setting cannot be made ([`super::set`]).
+    #[error("{file}: {error}")]
+    Set {
+        /// The scene file.
+        file: PathBuf,
+        /// The setting and what is wrong with it.
+        error: super::set::SetError,
+    },
     /// A mesh file is bad.
     #[error("{file}:{line}: {key}: mesh {mesh}: {error}")]
     Mesh {
@@ -71,7 +79,7 @@ impl SceneError {
     /// The 1-based line the error points at, when it has one.
     pub fn line(&self) -> Option<usize> {
         match self {
-            SceneError::Io { .. } | SceneError::Value { .. } => None,
+            SceneError::Io { .. } | SceneError::Value { .. } | SceneError::Set { .. } => None,
             SceneError::Syntax { line, .. }
             | SceneError::Invalid { line, .. }
             | SceneError::Mesh { line, .. } => Some(*line),
@@ -81,12 +89,35 @@ impl SceneError {
     /// The key the error names, when it has one.
     pub fn key(&self) -> Option<&str> {
         match self {
-            SceneError::Io { .. } => None,
+            SceneError::Io { .. } | SceneError::Set { .. } => None,
             SceneError::Syntax { key, .. }
             | SceneError::Invalid { key, .. }
             | SceneError::Value { key, .. }
             | SceneError::Mesh { key, .. } => Some(key),
         }
+    }
+}
+
+impl SceneError {
+    /// This error of a scene read with `--set` settings, told in the file's terms: its line
+    /// the file's own, and, where a setting wrote the value at fault, the setting named.
+    pub(super) fn through_settings(mut self, applied: &super::set::Applied) -> SceneError {
+        match &mut self {
+            SceneError::Syntax {
+                line, key, message, ..
+            }
+            | SceneError::Invalid {
+                line, key, message, ..
+            } => {
+                if let Some(arg) = applied.setting_for(*line, key) {
+                    message.push_str(&format!(" (set by --set {arg})"));
+                }
+                *line = applied.file_line(*line);
+            }
+            SceneError::Mesh { line, .. } => *line = applied.file_line(*line),
+            SceneError::Io { .. } | SceneError::Value { .. } | SceneError::Set { .. } => {}
+        }
+        self
     }
 }
 

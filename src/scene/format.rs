@@ -1,4 +1,4 @@
-//! The TOML scene format as serde reads it (README, "Scene format"). Unknown keys are
+//! The TOML scene format as serde reads it (docs/scene-format.md). Unknown keys are
 //! errors; values that need checking keep their position (`Spanned`) so that an error can
 //! name the line.
 
@@ -43,6 +43,16 @@ pub struct SceneFile {
     /// OBJ meshes.
     #[serde(default)]
     pub meshes: Vec<Spanned<MeshFile>>,
+    /// How the image is written.
+    pub output: Option<OutputFile>,
+}
+
+/// `[output]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputFile {
+    /// A PNG's bytes: `linear` (the default) or `srgb`.
+    pub encoding: Option<Spanned<String>>,
 }
 
 /// `[camera]`.

@@ -8,6 +8,7 @@ mod mesh;
 mod obj;
 mod ply;
 pub mod range;
+pub mod set;
 pub mod texture;
 pub(crate) mod validate;
 
@@ -133,7 +134,7 @@ pub enum LightKind {
     },
     /// A point light at `Light::position` shining along `direction` within `angle`
     /// degrees of it: full within `angle − falloff`, none beyond `angle`, and between the
-    /// two a smoothstep in the cosine (README, "Lights").
+    /// two a smoothstep in the cosine (docs/features.md, "Directional and spot lights").
     Spot {
         /// The spot's axis (any length but zero).
         direction: [f32; 3],
@@ -282,6 +283,9 @@ pub struct Scene {
     pub min_weight: f32,
     /// The camera.
     pub camera: Camera,
+    /// How a PNG's bytes encode the linear image (`[output] encoding`, default linear);
+    /// EXR and in-memory images are always linear.
+    pub encoding: crate::image::Encoding,
     /// Point lights.
     pub lights: Vec<Light>,
     /// Materials: the file's, sorted by name, then those of MTL files.
@@ -329,6 +333,9 @@ pub struct LoadOptions {
     /// [`crate::cache`]); `None` (the default) caches nothing. The scene keeps it for its
     /// BVH ([`Scene::cache`]).
     pub cache: Option<Arc<crate::cache::Cache>>,
+    /// Keys changed before the scene is read (`--set camera.fov=30`), in order; errors and
+    /// warnings still name the file's own lines (see [`set`]).
+    pub settings: Vec<set::Setting>,
 }
 
 impl Default for LoadOptions {
@@ -337,6 +344,7 @@ impl Default for LoadOptions {
             max_input_bytes: DEFAULT_MAX_INPUT_MIB << 20,
             confine: false,
             cache: None,
+            settings: Vec::new(),
         }
     }
 }
@@ -362,11 +370,26 @@ impl Scene {
     /// Reads and validates the scene file at `path` as `options` say.
     pub fn load_with(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Scene, SceneError> {
         let path = path.as_ref();
+        let text = read_scene_text(path, options.max_input_bytes)?;
+        Scene::parse_options(&text, path, options)
+    }
+
+    /// Parses and validates scene text; `path` names it in errors and anchors mesh paths.
+    pub fn parse(src: &str, path: &Path) -> Result<Scene, SceneError> {
+        Scene::parse_with(src, path, &read_from_disk)
+    }
+
+    /// [`Scene::parse`] as `options` say (limits, cache, settings; `confine` anchored at
+    /// the folder of `path`).
+    pub fn parse_options(
+        src: &str,
+        path: &Path,
+        options: &LoadOptions,
+    ) -> Result<Scene, SceneError> {
         let limit = options.max_input_bytes;
-        let text = read_scene_text(path, limit)?;
         if !options.confine {
             let read = move |p: &Path| read_from_disk_limited(p, limit);
-            return Scene::parse_limited(&text, path, &read, options);
+            return Scene::parse_limited(src, path, &read, options);
         }
         let root = path
             .parent()
@@ -377,12 +400,7 @@ impl Scene {
             error,
         })?;
         let read = confined_reader_limited(root, limit);
-        Scene::parse_limited(&text, path, &read, options)
-    }
-
-    /// Parses and validates scene text; `path` names it in errors and anchors mesh paths.
-    pub fn parse(src: &str, path: &Path) -> Result<Scene, SceneError> {
-        Scene::parse_with(src, path, &read_from_disk)
+        Scene::parse_limited(src, path, &read, options)
     }
 
     /// [`Scene::parse`], reading meshes and MTLs through `read` (a fuzzer or an embedder
@@ -392,8 +410,39 @@ impl Scene {
     }
 
     /// [`Scene::parse_with`] with [`LoadOptions::max_input_bytes`] unpacked at most from one
-    /// `.gz` mesh, and [`LoadOptions::cache`]; `options.confine` is `read`'s to apply.
+    /// `.gz` mesh, [`LoadOptions::cache`] and [`LoadOptions::settings`]; `options.confine`
+    /// is `read`'s to apply.
     fn parse_limited(
+        src: &str,
+        path: &Path,
+        read: &ReadFile<'_>,
+        options: &LoadOptions,
+    ) -> Result<Scene, SceneError> {
+        if options.settings.is_empty() {
+            return Scene::parse_text(src, path, read, options);
+        }
+        let applied = set::apply(src, &options.settings).map_err(|error| SceneError::Set {
+            file: path.to_owned(),
+            error,
+        })?;
+        let file = path.display().to_string();
+        match Scene::parse_text(&applied.text, path, read, options) {
+            Ok(mut scene) => {
+                let remap = |s: &mut String| *s = applied.remap_located(s, &file);
+                scene.warnings.iter_mut().for_each(remap);
+                scene.sphere_sources.iter_mut().for_each(remap);
+                scene
+                    .triangle_sources
+                    .iter_mut()
+                    .for_each(|(_, s)| remap(s));
+                Ok(scene)
+            }
+            Err(e) => Err(e.through_settings(&applied)),
+        }
+    }
+
+    /// [`Scene::parse_limited`] of text with its settings made.
+    fn parse_text(
         src: &str,
         path: &Path,
         read: &ReadFile<'_>,
@@ -897,6 +946,13 @@ impl Validator<'_> {
             max_depth: self.max_depth(&f.max_depth)?,
             min_weight: self.min_weight(&f.min_weight)?,
             camera,
+            encoding: match f.output.as_ref().and_then(|o| o.encoding.as_ref()) {
+                Some(e) => match e.get_ref().parse() {
+                    Ok(e) => e,
+                    Err(m) => return self.err(e.span(), "output.encoding", m.to_string()),
+                },
+                None => crate::image::Encoding::Linear,
+            },
             lights,
             materials,
             spheres,

@@ -256,7 +256,7 @@ impl<R: Real> Neg for V3<R> {
     }
 }
 
-/// The scene format's camera basis (README, "Scene format"), evaluated left to right: `[forward, right, up']`.
+/// The scene format's camera basis (docs/scene-format.md), evaluated left to right: `[forward, right, up']`.
 pub fn camera_basis<R: Real>(eye: V3<R>, look_at: V3<R>, up: V3<R>) -> [V3<R>; 3] {
     let forward = (look_at - eye).normalize();
     let right = forward.cross(up).normalize();

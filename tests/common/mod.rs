@@ -291,7 +291,7 @@ pub const SEED_SCENES: [&str; 5] = ["sphere", "triangle", "umbrella", "bb8", "mi
 
 /// Every scene in `scenes/` that needs no fetched mesh: the seed scenes, their shadowed,
 /// antialiased and mirrored variants, the Whitted scene, the PLY scene, the spot-lit scene
-/// and the textured scene (the README shows each).
+/// and the textured scene (the README and docs/features.md show each).
 pub const SHIPPED_SCENES: [&str; 13] = [
     "sphere",
     "triangle",
