@@ -114,6 +114,16 @@ fn run(cli: Cli) -> Result<Verdict> {
             tolerance,
         } => diff_images(&a, &b, &diff, tolerance),
         Command::Adapters => done(adapters()),
+        Command::Completions { shell } => {
+            let mut cmd = <Cli as clap::CommandFactory>::command();
+            clap_complete::generate(shell, &mut cmd, "glint", &mut std::io::stdout());
+            Ok(Verdict::Equal)
+        }
+        Command::Manpage => {
+            let man = clap_mangen::Man::new(<Cli as clap::CommandFactory>::command());
+            man.render(&mut std::io::stdout())?;
+            Ok(Verdict::Equal)
+        }
         Command::View {
             scene,
             backend,

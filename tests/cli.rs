@@ -407,3 +407,35 @@ fn view_without_a_display_says_so() {
     assert!(e.contains("cannot open a window on display \":97\""), "{e}");
     assert!(!e.contains(".cargo") && !e.contains(".rs:"), "{e}");
 }
+
+/// `glint completions SHELL` and `glint manpage` are generated from the parser itself, so
+/// they name today's flags.
+#[test]
+fn completions_and_manual_page_come_from_the_parser() {
+    let d = common::Scratch::new("cli-completions");
+    for (shell, mark) in [
+        ("bash", "_glint"),
+        ("zsh", "#compdef glint"),
+        ("fish", "complete -c glint"),
+    ] {
+        let o = glint(&d, &["completions", shell]);
+        let (out, err) = text(&o);
+        assert!(o.status.success(), "{err}");
+        assert!(
+            out.contains(mark) && out.contains("encoding") && out.contains("tolerance"),
+            "{shell}"
+        );
+    }
+    let o = glint(&d, &["manpage"]);
+    let (out, _) = text(&o);
+    assert!(o.status.success());
+    assert!(
+        out.starts_with(".ie") || out.contains(".TH glint"),
+        "{}",
+        &out[..out.len().min(200)]
+    );
+    assert!(out.contains("render") && out.contains("compare"));
+    // The twin: a shell clap_complete does not know is a usage error.
+    let o = glint(&d, &["completions", "tcsh"]);
+    assert_eq!(o.status.code(), Some(2));
+}

@@ -31,31 +31,23 @@ import uuid
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
+import numpy as np
+
 import glint
 
 
 def frame_scene(scene: glint.Scene, k: int, n: int) -> glint.Scene:
-    """The scene with the camera turned to frame ``k`` of ``n`` around its up axis."""
-    d = scene.to_dict()
-    cam = d["camera"]
-    eye = [float(x) for x in cam["eye"]]
-    at = [float(x) for x in cam["look_at"]]
-    up = [float(x) for x in cam.get("up", [0.0, 1.0, 0.0])]
-    ul = math.sqrt(sum(u * u for u in up))
-    up = [u / ul for u in up]
-    v = [e - a for e, a in zip(eye, at)]
-    h = sum(x * u for x, u in zip(v, up))  # height along up
-    r = [x - h * u for x, u in zip(v, up)]  # the part that turns
-    c = [  # up × r
-        up[1] * r[2] - up[2] * r[1],
-        up[2] * r[0] - up[0] * r[2],
-        up[0] * r[1] - up[1] * r[0],
-    ]
+    """The scene with the camera turned to frame ``k`` of ``n`` around its up axis (the
+    meshes are not read again: ``with_camera`` copies the scene in memory)."""
+    cam = scene.camera
+    eye, at, up = (np.array(cam[key], np.float64) for key in ("eye", "look_at", "up"))
+    up /= np.linalg.norm(up)
+    v = eye - at
+    h = v @ up  # height along up
+    r = v - h * up  # the part that turns
     angle = 2.0 * math.pi * k / n
-    ca, sa = math.cos(angle), math.sin(angle)
-    cam["eye"] = [a + h * u + ca * x + sa * y for a, u, x, y in zip(at, up, r, c)]
-    base = Path(scene.path).parent
-    return glint.Scene.from_dict(d, base_dir=base)
+    turned = at + h * up + math.cos(angle) * r + math.sin(angle) * np.cross(up, r)
+    return scene.with_camera(eye=tuple(float(x) for x in turned))
 
 
 def frame_name(k: int, fmt: str) -> str:
@@ -76,7 +68,7 @@ def render_frame(
     the file whole: a temporary name in the same folder, then a rename."""
     image = glint.render(frame_scene(scene, k, n), backend=backend, size=size)
     final = os.path.join(out, frame_name(k, fmt))
-    glint.save(image, final)
+    glint.save(final, image)
     return final
 
 

@@ -6,7 +6,7 @@ error. This package is its library, reached from Python::
 
     import glint
     image = glint.render("scenes/bb8.toml")   # float32 (height, width, 4): RGB and t
-    glint.save(image, "bb8.png")
+    glint.save("bb8.png", image)
 
 A ``Renderer`` keeps its device and compiled pipelines across calls; the module-level
 ``render`` keeps one per backend and adapter, so it never starts a device per call.
@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 import threading
-from typing import Any, Dict, Optional, Tuple, Union
+from typing import Any, Callable, Dict, Optional, Tuple, Union
 
 import numpy as np
 
@@ -25,12 +25,12 @@ from ._glint import (
     Renderer,
     Scene,
     SceneError,
+    _compare_on,
+    _renderers_made,
+    _save,
     adapters,
     backends,
-    compare_on,
     load,
-    renderers_made,
-    save,
 )
 
 __all__ = [
@@ -49,21 +49,26 @@ __all__ = [
 
 SceneLike = Union[Scene, str, "os.PathLike[str]", Dict[str, Any]]
 
-_renderers: Dict[Tuple[str, Optional[str]], Renderer] = {}
+Progress = Callable[[int, int], Any]
+
+_renderers: Dict[Tuple[str, Optional[str], Optional[int]], Renderer] = {}
 _lock = threading.Lock()
 
 
-def renderer(backend: str = "auto", adapter: Optional[str] = None) -> Renderer:
-    """The process's shared ``Renderer`` for ``backend`` and ``adapter``, made on first use.
+def renderer(
+    backend: str = "auto", adapter: Optional[str] = None, threads: Optional[int] = None
+) -> Renderer:
+    """The process's shared ``Renderer`` for ``backend``, ``adapter`` and ``threads``, made
+    on first use (and made again if it was closed).
 
     The module-level ``render`` and ``compare`` use it, so a device starts once per
     process, not once per call.
     """
-    key = (backend, adapter)
+    key = (backend, adapter, threads)
     with _lock:
         r = _renderers.get(key)
-        if r is None:
-            r = Renderer(backend, adapter)
+        if r is None or r.closed:
+            r = Renderer(backend, adapter, threads)
             _renderers[key] = r
         return r
 
@@ -77,6 +82,8 @@ def render(
     max_depth: Optional[int] = None,
     adapter: Optional[str] = None,
     math: str = "exact",
+    threads: Optional[int] = None,
+    progress: Optional[Progress] = None,
 ) -> np.ndarray:
     """Renders ``scene`` and returns float32 of shape (height, width, 4).
 
@@ -88,17 +95,21 @@ def render(
     ``samples``, ``triangle`` and ``max_depth`` override the scene's; ``adapter`` picks a
     Vulkan adapter by name; ``math`` is the GPU kernel's division and square root
     (``"exact"``: correctly rounded on every driver, the default; ``"corrected"``;
-    ``"fast"``: the driver's own). Raises
-    ``glint.SceneError`` for a bad scene, ``OSError`` for a file that cannot be read,
-    ``glint.RenderError`` when the render fails, ``KeyboardInterrupt`` on Ctrl-C.
+    ``"fast"``: the driver's own); ``threads`` the CPU threads (default one per core);
+    ``progress(rows_done, rows_total)`` is called as rows are traced. Note the shapes:
+    ``size`` is (width, height), as the command line's ``--size WxH``; the array is
+    (height, width, 4), numpy's rows first. Raises ``glint.SceneError`` for a bad scene,
+    ``OSError`` for a file that cannot be read, ``glint.RenderError`` when the render
+    fails, ``KeyboardInterrupt`` on Ctrl-C.
     """
-    return renderer(backend, adapter).render(
+    return renderer(backend, adapter, threads).render(
         scene,
         size=size,
         samples=samples,
         triangle=triangle,
         max_depth=max_depth,
         math=math,
+        progress=progress,
     )
 
 
@@ -120,7 +131,7 @@ def compare(
     ``ray_query``. ``math`` as in ``render``; with ``"exact"`` the GPU's image is the
     mirror's in every bit. Needs a Vulkan adapter (lavapipe will do).
     """
-    return compare_on(
+    return _compare_on(
         renderer("gpu", adapter),
         scene,
         size=size,
@@ -129,3 +140,30 @@ def compare(
         max_depth=max_depth,
         math=math,
     )
+
+
+def save(path: Any, array: Any, encoding: str = "linear") -> None:
+    """Writes an image to ``path`` as its extension says: ``.png`` (8-bit RGB, as
+    ``glint render`` writes it) or ``.exr`` (float32, exactly). The file appears whole or
+    not at all (a temporary file beside it, then a rename).
+
+    ``array`` has shape (height, width, 3) or (height, width, 4) and dtype float32 (linear
+    colour, as ``render`` returns it; the 4th channel, t, goes to the EXR's alpha, and an
+    RGB array gets alpha 1) or uint8 (bytes, written to a PNG as they are, and to an EXR as
+    byte / 255). ``encoding`` is a PNG's transfer for float arrays: ``"linear"`` (the
+    default, as the command line) or ``"srgb"`` (the sRGB curve; the PNG says so); an EXR
+    is always linear. The older order, ``save(array, path)``, is still taken.
+    """
+    if isinstance(path, np.ndarray) and not isinstance(array, np.ndarray):
+        path, array = array, path
+    a = np.asarray(array)
+    if a.ndim != 3 or a.shape[2] not in (3, 4):
+        raise ValueError(f"save: expected shape (height, width, 3 or 4), got {a.shape}")
+    if a.dtype == np.uint8:
+        a = a.astype(np.float32) / np.float32(255.0)
+        encoding = "linear"
+    elif a.dtype != np.float32:
+        raise TypeError(f"save: expected float32 or uint8, got {a.dtype}")
+    if a.shape[2] == 3:
+        a = np.concatenate([a, np.ones(a.shape[:2] + (1,), np.float32)], axis=2)
+    _save(np.ascontiguousarray(a), path, encoding)

@@ -1,7 +1,7 @@
 """Type stubs of the ``glint`` package."""
 
 import os
-from typing import Any, Dict, Optional, Tuple, Union
+from typing import Any, Callable, Dict, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -12,15 +12,15 @@ from ._glint import Scene as Scene
 from ._glint import SceneError as SceneError
 from ._glint import adapters as adapters
 from ._glint import backends as backends
-from ._glint import compare_on as compare_on
 from ._glint import load as load
-from ._glint import renderers_made as renderers_made
-from ._glint import save as save
 
 SceneLike = Union[Scene, str, "os.PathLike[str]", Dict[str, Any]]
+Progress = Callable[[int, int], Any]
 
-def renderer(backend: str = "auto", adapter: Optional[str] = None) -> Renderer:
-    """The process's shared Renderer for a backend and adapter."""
+def renderer(
+    backend: str = "auto", adapter: Optional[str] = None, threads: Optional[int] = None
+) -> Renderer:
+    """The process's shared Renderer for a backend, adapter and thread count."""
 
 def render(
     scene: SceneLike,
@@ -31,6 +31,8 @@ def render(
     max_depth: Optional[int] = None,
     adapter: Optional[str] = None,
     math: str = "exact",
+    threads: Optional[int] = None,
+    progress: Optional[Progress] = None,
 ) -> npt.NDArray[np.float32]:
     """Renders a scene: float32 (height, width, 4), RGB and the hit distance t."""
 
@@ -44,3 +46,10 @@ def compare(
     math: str = "exact",
 ) -> Dict[str, Any]:
     """glint compare's metrics as a dict."""
+
+def save(
+    path: Union[str, "os.PathLike[str]"],
+    array: Union[npt.NDArray[np.float32], npt.NDArray[np.uint8]],
+    encoding: str = "linear",
+) -> None:
+    """Writes (height, width, 3|4) float32 or uint8 as PNG or EXR, whole or not at all."""

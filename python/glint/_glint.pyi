@@ -1,7 +1,7 @@
 """Type stubs of glint's extension module (re-exported by ``glint``)."""
 
 import os
-from typing import Any, Dict, List, Optional, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -22,8 +22,9 @@ class Scene:
     """A validated scene; immutable, picklable (by its text and paths)."""
 
     @staticmethod
-    def load(path: _Path, *, cache: Union[None, bool, _Path] = None) -> Scene:
-        """Loads and validates a scene file (meshes relative to its folder)."""
+    def load(path: _Path, *, cache: Union[None, bool, _Path] = True) -> Scene:
+        """Loads and validates a scene file (meshes relative to its folder); cached as the
+        command line caches unless ``cache`` is False or None."""
     @staticmethod
     def from_toml(text: str, base_dir: _Path = ".") -> Scene:
         """A scene from TOML text; mesh paths resolve against ``base_dir``."""
@@ -49,11 +50,27 @@ class Scene:
     @property
     def warnings(self) -> List[str]:
         """The warnings loading gave."""
+    @property
+    def camera(self) -> Dict[str, Any]:
+        """The camera: eye, look_at, up, fov, size (width, height), samples."""
+    def with_camera(
+        self,
+        *,
+        eye: Optional[Tuple[float, float, float]] = None,
+        look_at: Optional[Tuple[float, float, float]] = None,
+        up: Optional[Tuple[float, float, float]] = None,
+        fov: Optional[float] = None,
+        size: Optional[Tuple[int, int]] = None,
+        samples: Optional[int] = None,
+    ) -> Scene:
+        """A copy with the camera's given parts changed; meshes are not read again."""
 
 class Renderer:
     """One backend, with its device and compiled pipelines kept across calls."""
 
-    def __init__(self, backend: str = "auto", adapter: Optional[str] = None) -> None: ...
+    def __init__(
+        self, backend: str = "auto", adapter: Optional[str] = None, threads: Optional[int] = None
+    ) -> None: ...
     def render(
         self,
         scene: Union[Scene, _Path, Dict[str, Any]],
@@ -63,8 +80,16 @@ class Renderer:
         triangle: Optional[str] = None,
         max_depth: Optional[int] = None,
         math: str = "exact",
+        progress: Optional[Callable[[int, int], Any]] = None,
     ) -> npt.NDArray[np.float32]:
         """Renders a scene: float32 (height, width, 4), RGB and the hit distance t."""
+    def close(self) -> None:
+        """Lets the device go; a later render raises RenderError."""
+    @property
+    def closed(self) -> bool:
+        """Whether close() was called."""
+    def __enter__(self) -> Renderer: ...
+    def __exit__(self, *args: Any) -> bool: ...
     @property
     def backend(self) -> str:
         """The backend asked for."""
@@ -74,7 +99,7 @@ class Renderer:
     def describe(self) -> str:
         """What renders, in words."""
 
-def compare_on(
+def _compare_on(
     renderer: Renderer,
     scene: Union[Scene, _Path, Dict[str, Any]],
     *,
@@ -89,13 +114,13 @@ def compare_on(
 def adapters() -> List[Dict[str, str]]:
     """The Vulkan adapters, best first."""
 
-def save(array: npt.NDArray[np.float32], path: _Path) -> None:
-    """Writes a (height, width, 4) float32 frame as PNG or EXR."""
+def _save(array: npt.NDArray[np.float32], path: _Path, encoding: str) -> None:
+    """glint.save's core: C-contiguous float32 (height, width, 4)."""
 
 def load(path: _Path) -> npt.NDArray[np.float32]:
     """Reads a PNG or EXR as float32 (height, width, 4)."""
 
-def renderers_made() -> int:
+def _renderers_made() -> int:
     """How many Renderers this process has made."""
 
 def backends() -> List[str]:

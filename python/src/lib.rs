@@ -27,7 +27,7 @@ use scene::{Scene, scene_arg};
 #[pyfunction]
 #[pyo3(signature = (renderer, scene, *, size=None, samples=None, triangle=None, max_depth=None, math="exact"))]
 #[allow(clippy::too_many_arguments)] // Python's keyword arguments
-fn compare_on<'py>(
+fn _compare_on<'py>(
     py: Python<'py>,
     renderer: &Renderer,
     scene: &Bound<'py, PyAny>,
@@ -39,12 +39,13 @@ fn compare_on<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let scene = scene_arg(py, scene)?;
     let options = render::options(size, samples, triangle, max_depth, math)?;
-    let gpu = match renderer.inner.tracer() {
+    let inner = renderer.inner()?;
+    let gpu = match inner.tracer() {
         glint::Tracer::Gpu(g) | glint::Tracer::GpuRq(g) => g,
         _ => {
             return Err(PyValueError::new_err(format!(
                 "compare needs a GPU renderer; this one is {:?}",
-                renderer.inner.backend().name()
+                inner.backend().name()
             )));
         }
     };
@@ -113,11 +114,19 @@ fn adapters(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
     Ok(out)
 }
 
-/// Writes a float32 (height, width, 4) frame as `path`'s extension says: `.png` (8-bit
-/// sRGB-less RGB, as `glint render` writes it) or `.exr` (the f32 image with t in alpha).
-/// The file appears whole or not at all.
+/// `glint.save`'s core: a C-contiguous float32 (height, width, 4) array to a PNG (its
+/// bytes encoded as `encoding` says) or an EXR. The Python wrapper takes the other shapes
+/// and types.
 #[pyfunction]
-fn save(py: Python<'_>, array: PyReadonlyArray3<'_, f32>, path: PathBuf) -> PyResult<()> {
+fn _save(
+    py: Python<'_>,
+    array: PyReadonlyArray3<'_, f32>,
+    path: PathBuf,
+    encoding: &str,
+) -> PyResult<()> {
+    let encoding: glint::image::Encoding = encoding
+        .parse()
+        .map_err(|e: glint::image::UnknownEncoding| PyValueError::new_err(e.to_string()))?;
     let shape = array.shape();
     if shape[2] != 4 {
         return Err(PyValueError::new_err(format!(
@@ -142,10 +151,13 @@ fn save(py: Python<'_>, array: PyReadonlyArray3<'_, f32>, path: PathBuf) -> PyRe
         height: h as u32,
         pixels,
     };
-    py.detach(|| image.save(&path)).map_err(|e| image_error(&e))
+    py.detach(|| match glint::image::format_of(&path)? {
+        glint::image::Format::Png => image.save_png_encoded(&path, encoding),
+        glint::image::Format::Exr => image.save(&path),
+    })
+    .map_err(|e| image_error(&e))
 }
 
-/// Reads a PNG or an EXR as `glint compare` reads it: float32 (height, width, 4).
 #[pyfunction]
 fn load(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
     // The library names a missing file in a decode error; Python wants an OSError.
@@ -158,9 +170,9 @@ fn load(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
     Ok(array.reshape([h, w, 4])?.into_any())
 }
 
-/// How many `Renderer`s this process has made.
+/// How many `Renderer`s this process has made (for the tests).
 #[pyfunction]
-fn renderers_made() -> usize {
+fn _renderers_made() -> usize {
     render::RENDERERS_MADE.load(std::sync::atomic::Ordering::Relaxed)
 }
 
@@ -177,11 +189,11 @@ fn _glint(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Renderer>()?;
     m.add("SceneError", m.py().get_type::<errors::SceneError>())?;
     m.add("RenderError", m.py().get_type::<errors::RenderError>())?;
-    m.add_function(wrap_pyfunction!(compare_on, m)?)?;
+    m.add_function(wrap_pyfunction!(_compare_on, m)?)?;
     m.add_function(wrap_pyfunction!(adapters, m)?)?;
-    m.add_function(wrap_pyfunction!(save, m)?)?;
+    m.add_function(wrap_pyfunction!(_save, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
-    m.add_function(wrap_pyfunction!(renderers_made, m)?)?;
+    m.add_function(wrap_pyfunction!(_renderers_made, m)?)?;
     m.add_function(wrap_pyfunction!(backends, m)?)?;
     Ok(())
 }

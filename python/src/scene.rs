@@ -19,8 +19,9 @@ const TEXT_NAME: &str = "<toml>";
 /// How a scene was made: what pickling sends to make it again.
 #[derive(Clone)]
 enum Origin {
-    /// A file: loaded again from its path (with the cache folder it had, if any).
-    File(PathBuf, Option<PathBuf>),
+    /// A file: loaded again from its path (with the cache folder it had, if any), then
+    /// the settings (`key=value`, as `--set`) that `with_camera` made.
+    File(PathBuf, Option<PathBuf>, Vec<String>),
     /// TOML text, its meshes relative to the folder.
     Text(PathBuf),
     /// A dict, its meshes relative to the folder.
@@ -49,25 +50,43 @@ impl Scene {
 
     fn parse(py: Python<'_>, text: String, origin: Origin) -> PyResult<Scene> {
         let (path, dict) = match &origin {
-            Origin::File(p, _) => (p.clone(), false),
+            Origin::File(p, ..) => (p.clone(), false),
             Origin::Text(d) => (d.join(TEXT_NAME), false),
             Origin::Dict(d) => (d.join(DICT_NAME), true),
         };
         let result = py.detach(|| match &origin {
-            Origin::File(p, cache) => {
+            Origin::File(p, cache, settings) => {
+                let settings = settings
+                    .iter()
+                    .map(|s| s.parse())
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|error| glint::scene::SceneError::Set {
+                        file: p.clone(),
+                        error,
+                    })?;
                 let options = glint::scene::LoadOptions {
                     cache: cache.as_ref().map(|dir| {
                         Arc::new(glint::cache::Cache::new(glint::cache::Settings::new(
                             dir.clone(),
                         )))
                     }),
+                    settings,
                     ..glint::scene::LoadOptions::default()
                 };
-                glint::scene::Scene::load_with(p, &options)
+                let scene = glint::scene::Scene::parse_options(&text, p, &options)?;
+                // The text with the settings made, for `to_toml`, `to_dict` and pickling.
+                let text = match options.settings.is_empty() {
+                    true => None,
+                    false => glint::scene::set::apply(&text, &options.settings)
+                        .ok()
+                        .map(|a| a.text),
+                };
+                Ok((scene, text))
             }
-            _ => glint::scene::Scene::parse(&text, &path),
+            _ => glint::scene::Scene::parse(&text, &path).map(|s| (s, None)),
         });
-        let scene = result.map_err(|e| from_scene_error(py, &e, dict))?;
+        let (scene, made) = result.map_err(|e| from_scene_error(py, &e, dict))?;
+        let text = made.unwrap_or(text);
         Ok(Scene {
             scene: Arc::new(scene),
             text,
@@ -79,25 +98,22 @@ impl Scene {
 #[pymethods]
 impl Scene {
     /// Loads and validates the scene file at `path` (a str or os.PathLike); its meshes
-    /// resolve against the file's folder. `cache`: a folder for the cache of large meshes
-    /// and their BVHs (as `glint render` keeps in `~/.cache/glint`), `True` for that
-    /// default folder, or `None`/`False` for none. Raises `glint.SceneError` or `OSError`.
+    /// resolve against the file's folder. `cache`: `True` (the default, as `glint render`)
+    /// for the cache of large meshes and their BVHs in the command line's folder
+    /// (`GLINT_CACHE_DIR`, else `$XDG_CACHE_HOME/glint`, else `~/.cache/glint`; none when
+    /// none of them is set), a folder of its own, or `False`/`None` for none. Raises
+    /// `glint.SceneError` or `OSError`.
     #[staticmethod]
-    #[pyo3(signature = (path, *, cache=None))]
-    fn load(py: Python<'_>, path: PathBuf, cache: Option<&Bound<'_, PyAny>>) -> PyResult<Scene> {
+    #[pyo3(signature = (path, *, cache=Some(CacheArg::Flag(true))))]
+    fn load(py: Python<'_>, path: PathBuf, cache: Option<CacheArg>) -> PyResult<Scene> {
         let cache = match cache {
-            None => None,
-            Some(c) if c.is_instance_of::<PyBool>() => match c.extract::<bool>()? {
-                true => Some(glint::cache::default_dir().ok_or_else(|| {
-                    PyTypeError::new_err("cache=True: no default cache folder (HOME is unset)")
-                })?),
-                false => None,
-            },
-            Some(c) => Some(c.extract::<PathBuf>()?),
+            Some(CacheArg::Flag(true)) => glint::cache::default_dir(),
+            None | Some(CacheArg::Flag(false)) => None,
+            Some(CacheArg::Folder(dir)) => Some(dir),
         };
         let text =
             std::fs::read_to_string(&path).map_err(|e| crate::errors::os_error(&path, &e))?;
-        Scene::parse(py, text, Origin::File(path, cache))
+        Scene::parse(py, text, Origin::File(path, cache, Vec::new()))
     }
 
     /// A scene from TOML text in the scene file's format; mesh paths resolve against
@@ -171,32 +187,122 @@ impl Scene {
         self.scene.warnings.clone()
     }
 
+    /// The camera, as a dict: `eye`, `look_at`, `up` (3-tuples), `fov` (degrees, vertical),
+    /// `size` ((width, height)) and `samples` (N×N rays a pixel). Change it with
+    /// `with_camera`.
+    #[getter]
+    fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = &self.scene.camera;
+        let d = PyDict::new(py);
+        d.set_item("eye", (c.eye[0], c.eye[1], c.eye[2]))?;
+        d.set_item("look_at", (c.look_at[0], c.look_at[1], c.look_at[2]))?;
+        d.set_item("up", (c.up[0], c.up[1], c.up[2]))?;
+        d.set_item("fov", c.fov)?;
+        d.set_item("size", (c.width, c.height))?;
+        d.set_item("samples", c.samples)?;
+        Ok(d)
+    }
+
+    /// A copy of this scene with the camera's given parts changed (the others kept): `eye`,
+    /// `look_at`, `up` (3 numbers each), `fov` (degrees), `size` ((width, height)),
+    /// `samples`. Meshes, textures and BVH inputs are not read again: the geometry is
+    /// copied in memory. The new camera is checked as a scene file's is (`SceneError`
+    /// naming `camera.KEY`); `to_dict`, `to_toml` and pickling carry it.
+    #[pyo3(signature = (*, eye=None, look_at=None, up=None, fov=None, size=None, samples=None))]
+    #[allow(clippy::too_many_arguments)] // Python's keyword arguments
+    fn with_camera(
+        &self,
+        py: Python<'_>,
+        eye: Option<[f32; 3]>,
+        look_at: Option<[f32; 3]>,
+        up: Option<[f32; 3]>,
+        fov: Option<f32>,
+        size: Option<(u32, u32)>,
+        samples: Option<u32>,
+    ) -> PyResult<Scene> {
+        let mut scene = (*self.scene).clone();
+        let c = &mut scene.camera;
+        let v3 = |v: [f32; 3]| format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2]);
+        let mut settings = Vec::new();
+        if let Some(v) = eye {
+            c.eye = v;
+            settings.push(format!("camera.eye={}", v3(v)));
+        }
+        if let Some(v) = look_at {
+            c.look_at = v;
+            settings.push(format!("camera.look_at={}", v3(v)));
+        }
+        if let Some(v) = up {
+            c.up = v;
+            settings.push(format!("camera.up={}", v3(v)));
+        }
+        if let Some(v) = fov {
+            c.fov = v;
+            settings.push(format!("camera.fov={v:?}"));
+        }
+        if let Some((w, h)) = size {
+            (c.width, c.height) = (w, h);
+            settings.push(format!("camera.width={w}"));
+            settings.push(format!("camera.height={h}"));
+        }
+        if let Some(n) = samples {
+            c.samples = n;
+            settings.push(format!("camera.samples={n}"));
+        }
+        let dict = self.is_from_dict();
+        scene
+            .validate()
+            .map_err(|e| from_scene_error(py, &e, dict))?;
+        let parsed = settings
+            .iter()
+            .map(|s| s.parse::<glint::scene::set::Setting>())
+            .collect::<Result<Vec<_>, _>>()
+            .and_then(|list| glint::scene::set::apply(&self.text, &list))
+            .map_err(|e| PyTypeError::new_err(e.to_string()))?;
+        let origin = match &self.origin {
+            Origin::File(p, cache, old) => {
+                let mut all = old.clone();
+                all.extend(settings);
+                Origin::File(p.clone(), cache.clone(), all)
+            }
+            other => other.clone(),
+        };
+        Ok(Scene {
+            scene: Arc::new(scene),
+            text: parsed.text,
+            origin,
+        })
+    }
+
     /// Pickling: the text and how to resolve it, not the triangles.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         let make = py.import("glint")?.getattr("Scene")?.getattr("_remake")?;
-        let (kind, a, b) = match &self.origin {
-            Origin::File(p, c) => ("file", p.clone(), c.clone()),
-            Origin::Text(d) => ("text", d.clone(), None),
-            Origin::Dict(d) => ("dict", d.clone(), None),
+        let (kind, a, b, settings) = match &self.origin {
+            Origin::File(p, c, s) => ("file", p.clone(), c.clone(), s.clone()),
+            Origin::Text(d) => ("text", d.clone(), None, Vec::new()),
+            Origin::Dict(d) => ("dict", d.clone(), None, Vec::new()),
         };
-        (make, (kind, self.text.clone(), a, b)).into_pyobject(py)
+        (make, (kind, self.text.clone(), a, b, settings)).into_pyobject(py)
     }
 
     /// Makes a scene again from what `__reduce__` sent (a file is read again from its
-    /// path, so a scene pickled from a file follows that file).
+    /// path, so a scene pickled from a file follows that file, with the camera changes
+    /// made since).
     #[staticmethod]
+    #[pyo3(signature = (kind, text, a, b, settings=Vec::new()))]
     fn _remake(
         py: Python<'_>,
         kind: &str,
         text: String,
         a: PathBuf,
         b: Option<PathBuf>,
+        settings: Vec<String>,
     ) -> PyResult<Scene> {
         match kind {
             "file" => {
                 let text =
                     std::fs::read_to_string(&a).map_err(|e| crate::errors::os_error(&a, &e))?;
-                Scene::parse(py, text, Origin::File(a, b))
+                Scene::parse(py, text, Origin::File(a, b, settings))
             }
             "text" => Scene::parse(py, text, Origin::Text(a)),
             "dict" => Scene::parse(py, text, Origin::Dict(a)),
@@ -217,6 +323,15 @@ impl Scene {
     }
 }
 
+/// `Scene.load`'s `cache`: a flag or a folder.
+#[derive(FromPyObject)]
+pub(crate) enum CacheArg {
+    /// `True`: the command line's folder; `False`: none.
+    Flag(bool),
+    /// A folder of the caller's.
+    Folder(PathBuf),
+}
+
 /// A scene argument: a `Scene`, a path, or a dict.
 pub(crate) fn scene_arg(py: Python<'_>, scene: &Bound<'_, PyAny>) -> PyResult<Py<Scene>> {
     if let Ok(s) = scene.cast::<Scene>() {
@@ -226,7 +341,7 @@ pub(crate) fn scene_arg(py: Python<'_>, scene: &Bound<'_, PyAny>) -> PyResult<Py
         return Py::new(py, Scene::from_dict(py, d, PathBuf::from("."))?);
     }
     match scene.extract::<PathBuf>() {
-        Ok(p) => Py::new(py, Scene::load(py, p, None)?),
+        Ok(p) => Py::new(py, Scene::load(py, p, Some(CacheArg::Flag(true)))?),
         Err(_) => Err(PyTypeError::new_err(format!(
             "scene: expected a glint.Scene, a path or a dict, got {}",
             scene.get_type().name()?

@@ -1,6 +1,6 @@
-"""Every example of the Python guide (docs/python.md, which the README links to) runs as
-written: its Python blocks, and its turntable command, from a folder that holds the
-repository's scenes and examples."""
+"""Every example of the Python guide (docs/python.md, which the README links to) and of
+the README runs as written: their Python blocks, and the guide's turntable command, from a
+folder that holds the repository's scenes and examples."""
 
 from __future__ import annotations
 
@@ -22,8 +22,8 @@ def section() -> str:
     return (ROOT / "docs" / "python.md").read_text()
 
 
-def python_blocks() -> list:
-    return re.findall(r"```python\n(.*?)```", section(), re.S)
+def python_blocks(text: str = "") -> list:
+    return re.findall(r"```python\n(.*?)```", text or section(), re.S)
 
 
 def commands() -> list:
@@ -56,11 +56,23 @@ def test_the_python_blocks_run(readme_dir):
     assert scope["image"].shape == (600, 800, 4)
     assert (readme_dir / "bb8.exr").is_file()
     assert scope["frame"].shape == (240, 320, 4)
+    assert (readme_dir / "whitted.png").is_file()
+    assert scope["moved"].camera["eye"] == (0.0, 2.0, 9.0)
     lines = out.getvalue().splitlines()
-    assert lines[0] == "<dict>: camera.look_at: equals camera.eye: no view direction"
-    assert lines[1] == "camera.look_at"
-    assert lines[2].startswith("[")
+    assert lines[0].startswith("(") and lines[0].endswith("(800, 600)"), lines[0]
+    assert lines[1] == "<dict>: camera.look_at: equals camera.eye: no view direction"
+    assert lines[2] == "camera.look_at"
+    assert lines[3].startswith("[")
     assert np.array_equal(scope["rgb"], scope["image"][..., :3])
+
+
+def test_the_readmes_python_runs(readme_dir):
+    blocks = python_blocks((ROOT / "README.md").read_text())
+    assert len(blocks) == 1
+    scope: dict = {}
+    exec(compile(blocks[0], "README.md", "exec"), scope)
+    assert scope["image"].shape == (600, 800, 4)
+    assert (readme_dir / "bb8.exr").is_file()
 
 
 def test_the_turntable_command_runs(readme_dir):

@@ -68,14 +68,14 @@ def test_options_override_the_scene():
 
 def test_the_module_keeps_one_renderer_per_backend():
     glint.render(SCENES / "sphere.toml", backend="cpu", size=(8, 8))
-    before = glint.renderers_made()
+    before = glint._renderers_made()
     for _ in range(3):
         glint.render(SCENES / "sphere.toml", backend="cpu", size=(8, 8))
-    assert glint.renderers_made() == before
+    assert glint._renderers_made() == before
     assert glint.renderer("cpu") is glint.renderer("cpu")
     # The twin: a Renderer made by hand is counted.
     glint.Renderer("cpu")
-    assert glint.renderers_made() == before + 1
+    assert glint._renderers_made() == before + 1
 
 
 def test_threads_render_in_parallel_and_agree():
@@ -112,11 +112,38 @@ def test_save_writes_what_the_cli_writes(tmp_path):
     run_cli("render", str(SCENES / "bb8.toml"), "-o", str(png), "--backend", "cpu",
             "--size", "96x72")
     a = glint.render(SCENES / "bb8.toml", backend="cpu", size=(96, 72))
-    glint.save(a, tmp_path / "py.png")
+    glint.save(tmp_path / "py.png", a)
     assert same_bits(glint.load(tmp_path / "py.png"), glint.load(png))
-    glint.save(a, tmp_path / "py.exr")
+    glint.save(tmp_path / "py.exr", a)
     assert same_bits(glint.load(tmp_path / "py.exr"), a)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["cli.png", "py.exr", "py.png"]
+    # The older order is still taken.
+    glint.save(a, tmp_path / "old.png")
+    assert same_bits(glint.load(tmp_path / "old.png"), glint.load(png))
+    # sRGB: the command line's --encoding srgb, bit for bit; and not the linear PNG.
+    srgb = tmp_path / "cli-srgb.png"
+    run_cli("render", str(SCENES / "bb8.toml"), "-o", str(srgb), "--backend", "cpu",
+            "--size", "96x72", "--encoding", "srgb")
+    glint.save(tmp_path / "py-srgb.png", a, encoding="srgb")
+    assert same_bits(glint.load(tmp_path / "py-srgb.png"), glint.load(srgb))
+    assert not same_bits(glint.load(srgb), glint.load(png))
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "cli-srgb.png", "cli.png", "old.png", "py-srgb.png", "py.exr", "py.png"]
+
+
+def test_save_takes_rgb_and_bytes(tmp_path):
+    a = glint.render(SCENES / "bb8.toml", backend="cpu", size=(32, 24))
+    glint.save(tmp_path / "rgba.png", a)
+    glint.save(tmp_path / "rgb.png", a[..., :3].copy())
+    assert same_bits(glint.load(tmp_path / "rgb.png"), glint.load(tmp_path / "rgba.png"))
+    # uint8 bytes go to the PNG as they are.
+    b = (np.arange(32 * 24 * 3) % 256).astype(np.uint8).reshape(24, 32, 3)
+    glint.save(tmp_path / "bytes.png", b)
+    back = glint.load(tmp_path / "bytes.png")[..., :3]
+    assert np.array_equal(np.rint(back * 255).astype(np.uint8), b)
+    # An RGB EXR gets alpha 1.
+    glint.save(tmp_path / "rgb.exr", a[..., :3].copy())
+    e = glint.load(tmp_path / "rgb.exr")
+    assert same_bits(e[..., :3], a[..., :3]) and (e[..., 3] == 1).all()
 
 
 def test_save_refuses_bad_input(tmp_path):
@@ -124,9 +151,13 @@ def test_save_refuses_bad_input(tmp_path):
     with pytest.raises(ValueError, match="unknown image extension"):
         glint.save(a, tmp_path / "x.jpg")
     with pytest.raises(ValueError, match="shape"):
-        glint.save(np.zeros((4, 4, 3), np.float32), tmp_path / "x.png")
+        glint.save(tmp_path / "x.png", np.zeros((4, 4, 2), np.float32))
+    with pytest.raises(TypeError, match="float64"):
+        glint.save(tmp_path / "x.png", np.zeros((4, 4, 4), np.float64))
+    with pytest.raises(ValueError, match="encoding"):
+        glint.save(tmp_path / "x.png", a, encoding="gamma")
     with pytest.raises(FileNotFoundError):
-        glint.save(a, tmp_path / "no" / "such" / "x.png")
+        glint.save(tmp_path / "no" / "such" / "x.png", a)
     with pytest.raises(FileNotFoundError):
         glint.load(tmp_path / "missing.exr")
 
@@ -155,7 +186,7 @@ def test_compare_with_the_corrections_is_bit_exact(lavapipe_expected):
 
 def test_compare_needs_a_gpu_renderer():
     with pytest.raises(ValueError, match="GPU renderer"):
-        glint.compare_on(glint.Renderer("cpu"), SCENES / "bb8.toml")
+        glint._compare_on(glint.Renderer("cpu"), SCENES / "bb8.toml")
 
 
 def test_unknown_names_are_value_errors():
@@ -168,3 +199,32 @@ def test_unknown_names_are_value_errors():
         glint.render(SCENES / "bb8.toml", backend="cpu", size=(0, 4))
     with pytest.raises(TypeError):
         glint.render(42, backend="cpu")
+
+
+def test_threads_progress_and_close():
+    s = glint.Scene.load(SCENES / "whitted.toml")
+    seen = []
+    one = glint.Renderer("cpu", threads=1)
+    a = one.render(s, size=(64, 48), progress=lambda done, total: seen.append((done, total)))
+    b = glint.Renderer("cpu").render(s, size=(64, 48))
+    assert same_bits(a, b), "the thread count changes no bit"
+    assert seen and seen[-1] == (48, 48) and all(t == 48 for _, t in seen)
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+    # A progress callback that raises stops the render with its exception.
+    def stop(done, total):
+        raise RuntimeError("stop here")
+    with pytest.raises(RuntimeError, match="stop here"):
+        one.render(s, size=(64, 48), progress=stop)
+    with pytest.raises(ValueError, match="threads"):
+        glint.Renderer("cpu", threads=0)
+    # close(), and the context manager.
+    with glint.Renderer("cpu") as r:
+        r.render(s, size=(8, 8))
+        assert not r.closed
+    assert r.closed and r.describe() == "closed"
+    with pytest.raises(glint.RenderError, match="closed"):
+        r.render(s, size=(8, 8))
+    r.close()  # twice is allowed
+    # The module's shared renderer is made again once closed.
+    glint.renderer("cpu").close()
+    assert not glint.renderer("cpu").closed

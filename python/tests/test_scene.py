@@ -117,3 +117,49 @@ def test_a_scene_loads_with_the_cache(tmp_path):
     t = pickle.loads(pickle.dumps(s))
     assert same_bits(glint.render(s, backend="cpu", size=(32, 24)),
                      glint.render(t, backend="cpu", size=(32, 24)))
+
+
+def test_the_camera_reads_and_changes_without_reloading(tmp_path):
+    s = glint.Scene.load(SCENES / "bb8.toml", cache=False)
+    c = s.camera
+    assert set(c) == {"eye", "look_at", "up", "fov", "size", "samples"}
+    assert c["size"] == s.size
+    t = s.with_camera(eye=(0.0, 3.0, 9.0), fov=30.0, size=(40, 30))
+    assert t.camera["eye"] == (0.0, 3.0, 9.0) and t.camera["fov"] == 30.0
+    assert t.size == (40, 30) and t.camera["look_at"] == c["look_at"]
+    assert s.camera == c, "the scene it came from is unchanged"
+    # The same image as a scene file written with that camera: text, dict and pickle
+    # carry the camera, and each renders the same bits.
+    direct = glint.render(t, backend="cpu")
+    from_text = glint.Scene.from_toml(t.to_toml(), base_dir=SCENES)
+    from_dict = glint.Scene.from_dict(t.to_dict(), base_dir=SCENES)
+    pickled = pickle.loads(pickle.dumps(t))
+    for other in (from_text, from_dict, pickled):
+        assert other.camera == t.camera
+        assert same_bits(glint.render(other, backend="cpu"), direct)
+    # The twin: the old camera renders another image.
+    assert not same_bits(glint.render(s, backend="cpu", size=(40, 30)), direct)
+    # A bad camera is named as a scene file's would be.
+    with pytest.raises(glint.SceneError, match="camera.fov"):
+        s.with_camera(fov=200.0)
+    with pytest.raises(glint.SceneError, match="camera"):
+        s.with_camera(eye=c["look_at"])
+
+
+def test_load_caches_as_the_command_line_does(tmp_path, monkeypatch):
+    # The default is the command line's folder (GLINT_CACHE_DIR here); False caches nothing.
+    monkeypatch.setenv("GLINT_CACHE_DIR", str(tmp_path / "cache"))
+    mesh = tmp_path / "many.obj"
+    n = 100_000  # glint.cache.DEFAULT_MIN_PRIMS: smaller meshes are not cached
+    mesh.write_text("".join(f"v {i % 200 * 0.01} {i // 200 * 0.01} 0\n"
+                            f"v {i % 200 * 0.01 + 0.005} {i // 200 * 0.01} 0\n"
+                            f"v {i % 200 * 0.01} {i // 200 * 0.01 + 0.005} 0\n" for i in range(n))
+                    + "".join(f"f {3 * i + 1} {3 * i + 2} {3 * i + 3}\n" for i in range(n)))
+    scene = tmp_path / "many.toml"
+    scene.write_text('[camera]\neye = [1.0, 1.0, 5.0]\nlook_at = [1.0, 1.0, 0.0]\nfov = 60.0\n'
+                     'width = 16\nheight = 16\n[materials.m]\nmodel = "ambient"\nka = [1, 1, 1]\n'
+                     '[[meshes]]\nfile = "many.obj"\nmaterial = "m"\n')
+    glint.Scene.load(scene, cache=False)
+    assert not (tmp_path / "cache").exists()
+    glint.render(glint.Scene.load(scene), backend="cpu")
+    assert (tmp_path / "cache").is_dir() and any((tmp_path / "cache").rglob("*"))

@@ -212,6 +212,16 @@ pub enum Command {
     },
     /// List the Vulkan adapters, best first, with their drivers and versions.
     Adapters,
+    /// Print a shell's completion script for glint to standard output, e.g.
+    /// `glint completions bash > ~/.local/share/bash-completion/completions/glint`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print glint's manual page (roff) to standard output, e.g.
+    /// `glint manpage > ~/.local/share/man/man1/glint.1`.
+    Manpage,
     /// Compare two images (PNG or EXR) with `compare`'s metrics and write a difference
     /// image: an EXR made on a GPU machine against one made on the CPU elsewhere, bit for bit.
     Diff {
