@@ -278,7 +278,8 @@ fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
 /// the power is subnormal (`flush`: base ≤ 1, so every product on the way is at most the
 /// last, and a driver that flushes a subnormal step ends at 0 too).
 fn phong_power(base: f32, m: Material) -> f32 {
-    if m.n_int < 0 {
+    // POWERS is off only where no material has `n_int < 0`: the guard changes no result.
+    if POWERS && m.n_int < 0 {
         return flush(pow_det(base, m.n));
     }
     var result = 1.0;

@@ -383,6 +383,9 @@ pub struct Specialisation {
     pub light_kinds: bool,
     /// WGSL `TEXTURES`: some triangle is textured.
     pub textures: bool,
+    /// WGSL `POWERS`: some Phong material has a non-integer exponent (`pow_det` compiled
+    /// in).
+    pub powers: bool,
     /// WGSL `EXACT_MATH` and `INEXACT_DRIVER`: how the kernel divides and takes square
     /// roots. The CPU tracers ignore it: they divide as IEEE 754 does.
     pub math: MathMode,
@@ -489,6 +492,10 @@ impl Specialisation {
                     .any(|m| m.kr.iter().chain(&m.kt).any(|&k| k > 0.0)),
             light_kinds: buf.lights.iter().any(|l| l.kind != LIGHT_POINT),
             textures: !buf.uvs.is_empty(),
+            powers: buf
+                .materials
+                .iter()
+                .any(|m| m.model == MODEL_PHONG && m.n_int < 0),
             math: MathMode::default(),
         }
     }
@@ -511,6 +518,7 @@ impl Specialisation {
             whitted: true,
             light_kinds: true,
             textures: true,
+            powers: true,
             math: MathMode::default(),
         }
     }
@@ -526,7 +534,7 @@ impl Specialisation {
     }
 
     /// The `(name, value)` pairs for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 14] {
+    pub fn constants(&self) -> [(&'static str, f64); 15] {
         let b = |x: bool| if x { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -541,6 +549,7 @@ impl Specialisation {
             ("WHITTED", b(self.whitted)),
             ("LIGHT_KINDS", b(self.light_kinds)),
             ("TEXTURES", b(self.textures)),
+            ("POWERS", b(self.powers)),
             ("EXACT_MATH", b(self.math.math != Math::Fast)),
             ("INEXACT_DRIVER", b(self.math.inexact_driver)),
         ]

@@ -26,6 +26,8 @@ const CODE: &[&[u8]] = &[
     include_bytes!("shared/layout.rs"),
     include_bytes!("scene/mesh.rs"),
     include_bytes!("scene/obj.rs"),
+    include_bytes!("scene/ply.rs"),
+    include_bytes!("scene/gltf.rs"),
 ];
 
 /// First bytes of every entry (the last one is the format's version).

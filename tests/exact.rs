@@ -46,6 +46,7 @@ fn specialisations() -> [Specialisation; 2] {
         whitted: true,
         light_kinds: true,
         textures: true,
+        powers: true,
         math: Default::default(),
     };
     let lean = Specialisation {
@@ -58,6 +59,7 @@ fn specialisations() -> [Specialisation; 2] {
         whitted: false,
         light_kinds: false,
         textures: false,
+        powers: false,
         ..all
     };
     [all, lean]

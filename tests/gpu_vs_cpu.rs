@@ -204,7 +204,8 @@ material = "m"
 
 /// Shading edge cases through both tracers: n = 0 (0^0 = 1 where R·V ≤ 0), a very large
 /// integer n, a light in the floor's plane (N·L = 0 there) and behind the sphere, and
-/// non-integer n (`pow_det`, the same function on both sides).
+/// non-integer n (`pow_det`, the same function on both sides, compiled in only for them:
+/// `POWERS`).
 #[test]
 fn shading_edge_cases_agree() {
     let Some(gpu) = common::gpu() else { return };
@@ -224,6 +225,17 @@ fn shading_edge_cases_agree() {
         let (buf, spec) = buffers(&scene, 96, 72, TriangleAlgorithm::Watertight);
         let integer = n.parse::<f32>().unwrap().fract() == 0.0;
         assert_eq!(buf.materials[0].n_int >= 0, integer, "n = {n}");
+        // `pow_det` is compiled in exactly where a non-integer exponent needs it, and
+        // compiling it in where none does changes no bit.
+        assert_eq!(spec.powers, !integer, "n = {n}");
+        if integer {
+            let with = glint::buffers::Specialisation {
+                powers: true,
+                ..spec
+            };
+            let (a, b) = (render_gpu(gpu, &buf, spec), render_gpu(gpu, &buf, with));
+            assert!(glint::compare::diff(&a, &b).bit_exact(), "n = {n}: POWERS");
+        }
         let g = render_gpu(gpu, &buf, spec);
         let c = glint::cpu::render_f32(&buf, spec);
         assert!(

@@ -211,6 +211,7 @@ fn shader_constants_match_rust() {
         whitted: true,
         light_kinds: true,
         textures: true,
+        powers: true,
         math: Default::default(),
     };
     for (name, _) in spec.constants() {

@@ -19,7 +19,7 @@ class RenderError(RuntimeError):
     """A render failed for a reason other than the scene or a file."""
 
 class Scene:
-    """A validated scene; immutable, picklable (by its text and paths)."""
+    """A validated scene; its camera settable, picklable (by its text and paths)."""
 
     @staticmethod
     def load(path: _Path, *, cache: Union[None, bool, _Path] = True) -> Scene:
@@ -53,6 +53,9 @@ class Scene:
     @property
     def camera(self) -> Dict[str, Any]:
         """The camera: eye, look_at, up, fov, size (width, height), samples."""
+    @camera.setter
+    def camera(self, value: Dict[str, Any]) -> None:
+        """Changes the camera's given parts, as with_camera does, in this scene."""
     def with_camera(
         self,
         *,

@@ -49,7 +49,7 @@ fn _compare_on<'py>(
             )));
         }
     };
-    let s = scene.get();
+    let s = scene.get().state();
     let dict_source = s.is_from_dict();
     let report = py
         .detach(|| glint::render::compare(&s.scene, &options, gpu))

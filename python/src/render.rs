@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
 use crate::errors::{from_panic, from_render_error};
-use crate::scene::{Scene, scene_arg};
+use crate::scene::{State, scene_arg};
 
 /// How many `Renderer`s this process has made (the test that the module-level `render`
 /// keeps one).
@@ -115,7 +115,7 @@ impl Renderer {
             py,
             &inner,
             self.pool.as_deref(),
-            scene.get(),
+            &scene.get().state(),
             options,
             progress.as_ref(),
         )
@@ -214,7 +214,7 @@ pub(crate) fn render_array<'py>(
     py: Python<'py>,
     renderer: &glint::Renderer,
     pool: Option<&rayon::ThreadPool>,
-    scene: &Scene,
+    scene: &State,
     options: glint::RenderOptions,
     progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {

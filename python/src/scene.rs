@@ -3,10 +3,10 @@
 //! at the same paths, where it is unpickled).
 
 use std::path::PathBuf;
-use std::sync::Arc;
+use std::sync::{Arc, RwLock};
 
 use pyo3::PyTypeInfo;
-use pyo3::exceptions::PyTypeError;
+use pyo3::exceptions::{PyKeyError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
@@ -32,20 +32,41 @@ enum Origin {
 ///
 /// Make one with `Scene.load(path)`, `Scene.from_toml(text)` or `Scene.from_dict(d)`;
 /// every way checks it as the command line checks a scene file, with the same errors
-/// (`glint.SceneError`). A scene is immutable: edit `scene.to_dict()` and make a new one.
+/// (`glint.SceneError`). Its camera can be read and set (`camera`, `with_camera`); for
+/// anything else edit `scene.to_dict()` and make a new one.
 /// It pickles by its text and folder, so mesh files must be readable at the same paths
 /// where it is unpickled (on a cluster: a shared file system).
 #[pyclass(frozen, module = "glint", name = "Scene")]
 pub struct Scene {
+    /// What the scene is now: replaced whole when `camera` is set, so a render that took
+    /// it keeps the scene it started with.
+    state: RwLock<Arc<State>>,
+}
+
+/// A scene's content: the library's scene, the text it was made from, and how.
+pub(crate) struct State {
     pub(crate) scene: Arc<glint::scene::Scene>,
     text: String,
     origin: Origin,
 }
 
-impl Scene {
+impl State {
     /// Whether errors should name `<dict>` rather than lines of the generated TOML.
     pub(crate) fn is_from_dict(&self) -> bool {
         matches!(self.origin, Origin::Dict(_))
+    }
+}
+
+impl Scene {
+    fn new(state: State) -> Scene {
+        Scene {
+            state: RwLock::new(Arc::new(state)),
+        }
+    }
+
+    /// The scene as it is now.
+    pub(crate) fn state(&self) -> Arc<State> {
+        self.state.read().unwrap_or_else(|e| e.into_inner()).clone()
     }
 
     fn parse(py: Python<'_>, text: String, origin: Origin) -> PyResult<Scene> {
@@ -87,11 +108,11 @@ impl Scene {
         });
         let (scene, made) = result.map_err(|e| from_scene_error(py, &e, dict))?;
         let text = made.unwrap_or(text);
-        Ok(Scene {
+        Ok(Scene::new(State {
             scene: Arc::new(scene),
             text,
             origin,
-        })
+        }))
     }
 }
 
@@ -147,52 +168,55 @@ impl Scene {
     /// The scene as a dict with the scene file's keys (what it was made from, not the
     /// meshes' triangles): `Scene.from_dict(s.to_dict())` is the same scene.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let table: toml::Table = toml::from_str(&self.text)
+        let table: toml::Table = toml::from_str(&self.state().text)
             .map_err(|e| PyTypeError::new_err(format!("the scene's own text: {e}")))?;
         from_value(py, &toml::Value::Table(table))
     }
 
     /// The scene as TOML text in the scene file's format.
     fn to_toml(&self) -> String {
-        self.text.clone()
+        self.state().text.clone()
     }
 
     /// The scene file's path (or `<dict>` / `<toml>` in the base folder).
     #[getter]
     fn path(&self) -> PathBuf {
-        self.scene.path.clone()
+        self.state().scene.path.clone()
     }
 
     /// The camera's (width, height).
     #[getter]
     fn size(&self) -> (u32, u32) {
-        self.scene.size()
+        self.state().scene.size()
     }
 
     /// How many triangles, meshes' included.
     #[getter]
     fn triangles(&self) -> usize {
-        self.scene.triangles.len()
+        self.state().scene.triangles.len()
     }
 
     /// How many spheres.
     #[getter]
     fn spheres(&self) -> usize {
-        self.scene.spheres.len()
+        self.state().scene.spheres.len()
     }
 
     /// The warnings loading gave (a scene without lights, a zero-area triangle, ...).
     #[getter]
     fn warnings(&self) -> Vec<String> {
-        self.scene.warnings.clone()
+        self.state().scene.warnings.clone()
     }
 
     /// The camera, as a dict: `eye`, `look_at`, `up` (3-tuples), `fov` (degrees, vertical),
-    /// `size` ((width, height)) and `samples` (N×N rays a pixel). Change it with
-    /// `with_camera`.
+    /// `size` ((width, height)) and `samples` (N×N rays a pixel). Setting it to a dict of
+    /// some of these keys changes those parts, as `with_camera` does, in this scene (a
+    /// render already running keeps the camera it started with); an unknown key is a
+    /// `KeyError`.
     #[getter]
     fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let c = &self.scene.camera;
+        let st = self.state();
+        let c = &st.scene.camera;
         let d = PyDict::new(py);
         d.set_item("eye", (c.eye[0], c.eye[1], c.eye[2]))?;
         d.set_item("look_at", (c.look_at[0], c.look_at[1], c.look_at[2]))?;
@@ -220,69 +244,51 @@ impl Scene {
         size: Option<(u32, u32)>,
         samples: Option<u32>,
     ) -> PyResult<Scene> {
-        let mut scene = (*self.scene).clone();
-        let c = &mut scene.camera;
-        let v3 = |v: [f32; 3]| format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2]);
-        let mut settings = Vec::new();
-        if let Some(v) = eye {
-            c.eye = v;
-            settings.push(format!("camera.eye={}", v3(v)));
-        }
-        if let Some(v) = look_at {
-            c.look_at = v;
-            settings.push(format!("camera.look_at={}", v3(v)));
-        }
-        if let Some(v) = up {
-            c.up = v;
-            settings.push(format!("camera.up={}", v3(v)));
-        }
-        if let Some(v) = fov {
-            c.fov = v;
-            settings.push(format!("camera.fov={v:?}"));
-        }
-        if let Some((w, h)) = size {
-            (c.width, c.height) = (w, h);
-            settings.push(format!("camera.width={w}"));
-            settings.push(format!("camera.height={h}"));
-        }
-        if let Some(n) = samples {
-            c.samples = n;
-            settings.push(format!("camera.samples={n}"));
-        }
-        let dict = self.is_from_dict();
-        scene
-            .validate()
-            .map_err(|e| from_scene_error(py, &e, dict))?;
-        let parsed = settings
-            .iter()
-            .map(|s| s.parse::<glint::scene::set::Setting>())
-            .collect::<Result<Vec<_>, _>>()
-            .and_then(|list| glint::scene::set::apply(&self.text, &list))
-            .map_err(|e| PyTypeError::new_err(e.to_string()))?;
-        let origin = match &self.origin {
-            Origin::File(p, cache, old) => {
-                let mut all = old.clone();
-                all.extend(settings);
-                Origin::File(p.clone(), cache.clone(), all)
-            }
-            other => other.clone(),
+        let change = CameraChange {
+            eye,
+            look_at,
+            up,
+            fov,
+            size,
+            samples,
         };
-        Ok(Scene {
-            scene: Arc::new(scene),
-            text: parsed.text,
-            origin,
-        })
+        Ok(Scene::new(self.state().with_camera(py, change)?))
+    }
+
+    #[setter]
+    fn set_camera(&self, py: Python<'_>, value: &Bound<'_, PyDict>) -> PyResult<()> {
+        let mut change = CameraChange::default();
+        for (k, v) in value.iter() {
+            let key: String = k.extract()?;
+            match key.as_str() {
+                "eye" => change.eye = Some(v.extract()?),
+                "look_at" => change.look_at = Some(v.extract()?),
+                "up" => change.up = Some(v.extract()?),
+                "fov" => change.fov = Some(v.extract()?),
+                "size" => change.size = Some(v.extract()?),
+                "samples" => change.samples = Some(v.extract()?),
+                _ => {
+                    return Err(PyKeyError::new_err(format!(
+                        "camera: unknown key {key:?} (eye, look_at, up, fov, size, samples)"
+                    )));
+                }
+            }
+        }
+        let new = self.state().with_camera(py, change)?;
+        *self.state.write().unwrap_or_else(|e| e.into_inner()) = Arc::new(new);
+        Ok(())
     }
 
     /// Pickling: the text and how to resolve it, not the triangles.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         let make = py.import("glint")?.getattr("Scene")?.getattr("_remake")?;
-        let (kind, a, b, settings) = match &self.origin {
+        let st = self.state();
+        let (kind, a, b, settings) = match &st.origin {
             Origin::File(p, c, s) => ("file", p.clone(), c.clone(), s.clone()),
             Origin::Text(d) => ("text", d.clone(), None, Vec::new()),
             Origin::Dict(d) => ("dict", d.clone(), None, Vec::new()),
         };
-        (make, (kind, self.text.clone(), a, b, settings)).into_pyobject(py)
+        (make, (kind, st.text.clone(), a, b, settings)).into_pyobject(py)
     }
 
     /// Makes a scene again from what `__reduce__` sent (a file is read again from its
@@ -313,13 +319,84 @@ impl Scene {
     }
 
     fn __repr__(&self) -> String {
-        let (w, h) = self.scene.size();
+        let st = self.state();
+        let (w, h) = st.scene.size();
         format!(
             "glint.Scene({:?}, {w}x{h}, {} triangles, {} spheres)",
-            self.scene.path.display().to_string(),
-            self.scene.triangles.len(),
-            self.scene.spheres.len()
+            st.scene.path.display().to_string(),
+            st.scene.triangles.len(),
+            st.scene.spheres.len()
         )
+    }
+}
+
+/// Parts of a camera to change (`None`: kept).
+#[derive(Default)]
+struct CameraChange {
+    eye: Option<[f32; 3]>,
+    look_at: Option<[f32; 3]>,
+    up: Option<[f32; 3]>,
+    fov: Option<f32>,
+    size: Option<(u32, u32)>,
+    samples: Option<u32>,
+}
+
+impl State {
+    /// This scene with `change` made to its camera, checked as a file's camera is; the
+    /// text and the origin carry the change (as `--set` settings).
+    fn with_camera(&self, py: Python<'_>, change: CameraChange) -> PyResult<State> {
+        let mut scene = (*self.scene).clone();
+        let c = &mut scene.camera;
+        let v3 = |v: [f32; 3]| format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2]);
+        let mut settings = Vec::new();
+        if let Some(v) = change.eye {
+            c.eye = v;
+            settings.push(format!("camera.eye={}", v3(v)));
+        }
+        if let Some(v) = change.look_at {
+            c.look_at = v;
+            settings.push(format!("camera.look_at={}", v3(v)));
+        }
+        if let Some(v) = change.up {
+            c.up = v;
+            settings.push(format!("camera.up={}", v3(v)));
+        }
+        if let Some(v) = change.fov {
+            c.fov = v;
+            settings.push(format!("camera.fov={v:?}"));
+        }
+        if let Some((w, h)) = change.size {
+            (c.width, c.height) = (w, h);
+            settings.push(format!("camera.width={w}"));
+            settings.push(format!("camera.height={h}"));
+        }
+        if let Some(n) = change.samples {
+            c.samples = n;
+            settings.push(format!("camera.samples={n}"));
+        }
+        let dict = self.is_from_dict();
+        scene
+            .validate()
+            .map_err(|e| from_scene_error(py, &e, dict))?;
+        let parsed = settings
+            .iter()
+            .map(|s| s.parse::<glint::scene::set::Setting>())
+            .collect::<Result<Vec<_>, _>>()
+            .and_then(|list| glint::scene::set::apply(&self.text, &list))
+            .map_err(|e| PyTypeError::new_err(e.to_string()))?;
+        let origin = match &self.origin {
+            Origin::File(p, cache, old) => {
+                let mut all = old.clone();
+                all.extend(settings);
+                Origin::File(p.clone(), cache.clone(), all)
+            }
+            other => other.clone(),
+        };
+        Ok(State {
+            scene: Arc::new(scene),
+            text: parsed.text,
+            origin,
+        })
     }
 }
 

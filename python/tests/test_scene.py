@@ -139,6 +139,16 @@ def test_the_camera_reads_and_changes_without_reloading(tmp_path):
         assert same_bits(glint.render(other, backend="cpu"), direct)
     # The twin: the old camera renders another image.
     assert not same_bits(glint.render(s, backend="cpu", size=(40, 30)), direct)
+    # Setting the camera changes this scene, as with_camera makes a new one.
+    u = glint.Scene.load(SCENES / "bb8.toml", cache=False)
+    u.camera = {"eye": (0.0, 3.0, 9.0), "fov": 30.0, "size": (40, 30)}
+    assert u.camera == t.camera
+    assert same_bits(glint.render(u, backend="cpu"), direct)
+    with pytest.raises(KeyError, match="focal"):
+        u.camera = {"focal": 3.0}
+    with pytest.raises(glint.SceneError, match="camera.fov"):
+        u.camera = {"fov": 0.0}
+    assert u.camera == t.camera, "a refused camera changes nothing"
     # A bad camera is named as a scene file's would be.
     with pytest.raises(glint.SceneError, match="camera.fov"):
         s.with_camera(fov=200.0)

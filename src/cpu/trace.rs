@@ -346,6 +346,9 @@ pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: 
 
 /// WGSL `phong_power`: `base^n`, by squaring for an integer exponent, else `pow_det` (in
 /// f64, the reference, libm's `pow`); 0 where the power is subnormal.
+///
+/// WGSL guards the first branch with `POWERS` as well, which is off only where no material
+/// has `n_int < 0`: the same result, and a kernel without `pow_det`.
 pub fn phong_power<R: Real>(base: R, m: &Material) -> R {
     if m.n_int < 0 {
         if R::MIRROR {
