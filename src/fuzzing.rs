@@ -1,12 +1,15 @@
 //! The fuzz targets' harnesses (`fuzz/fuzz_targets/`), here so that the regression tests
 //! (`tests/fuzz_regressions.rs`) run exactly what the fuzzers ran. Each takes any bytes and
 //! returns the scene error as text, or `Ok` once a valid scene has also been flattened,
-//! had its BVH built and been rendered at 4×4 at most; it must never panic.
+//! had its BVH built and been rendered at 4×4 at most; it must never panic. The mesh and
+//! texture harnesses (`ply_load`, `gltf_load`, `texture_load`) also check what they got:
+//! an accepted scene has finite vertices and indices in range, a refusal names the scene
+//! file and a line.
 
 use std::path::Path;
 
 use crate::buffers::{SceneBuffers, Specialisation};
-use crate::scene::{ReadError, Scene};
+use crate::scene::{ReadError, ReadFile, Scene};
 
 /// A valid scene is flattened, its BVH built, and rendered small on the CPU mirror.
 fn render_small(scene: &Scene) {
@@ -61,4 +64,149 @@ pub fn obj_load(data: &[u8]) -> Result<(), String> {
         Scene::parse_with(OBJ_SCENE, Path::new("fuzz.toml"), &files).map_err(|e| e.to_string())?;
     render_small(&scene);
     Ok(())
+}
+
+/// What every accepted scene must hold, whatever its input: finite vertices, material
+/// indices in range, normals and texture coordinates for triangles that exist. Panics (a
+/// fuzzer's finding) where it does not.
+fn check_accepted(scene: &Scene) {
+    let materials = scene.materials.len() as u32;
+    for (i, t) in scene.triangles.iter().enumerate() {
+        assert!(
+            t.vertices.iter().flatten().all(|x| x.is_finite()),
+            "triangle {i}: a vertex is not finite: {:?}",
+            t.vertices
+        );
+        assert!(
+            t.material < materials,
+            "triangle {i}: material {}",
+            t.material
+        );
+    }
+    for s in &scene.smooth {
+        assert!(
+            s.first + s.normals.len() <= scene.triangles.len(),
+            "smooth normals"
+        );
+        assert!(s.normals.iter().flatten().flatten().all(|x| x.is_finite()));
+    }
+    for u in &scene.uvs {
+        assert!(u.first <= scene.triangles.len(), "texture coordinates");
+    }
+}
+
+/// What every refusal must hold: it names the scene file and a line (`fuzz.toml:N:`), and
+/// the mesh, texture or key at fault after it. Panics where it does not (public for the
+/// test that proves it can fail).
+pub fn check_refused(message: &str) {
+    let rest = message
+        .strip_prefix("fuzz.toml:")
+        .unwrap_or_else(|| panic!("a refusal that does not name the scene file: {message:?}"));
+    let line: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    assert!(
+        !line.is_empty() && rest[line.len()..].starts_with(": "),
+        "a refusal that names no line: {message:?}"
+    );
+}
+
+/// Reads `scene` with every other file served from `files`, then checks the outcome both
+/// ways and renders an accepted scene small.
+fn load_checked(scene: &str, files: &ReadFile<'_>) -> Result<(), String> {
+    match Scene::parse_with(scene, Path::new("fuzz.toml"), files) {
+        Ok(s) => {
+            check_accepted(&s);
+            render_small(&s);
+            Ok(())
+        }
+        Err(e) => {
+            let message = e.to_string();
+            check_refused(&message);
+            Err(message)
+        }
+    }
+}
+
+/// The bytes up to the first 0xFF, and those after it (empty without one).
+fn split_ff(data: &[u8]) -> (&[u8], &[u8]) {
+    match data.iter().position(|&b| b == 0xff) {
+        Some(k) => (&data[..k], &data[k + 1..]),
+        None => (data, &[]),
+    }
+}
+
+/// Target `ply_load`: the bytes after the first as a PLY mesh (ASCII or binary, as its
+/// header says), gzipped (`fuzz.ply.gz`) when the first byte is odd, smooth when its
+/// second bit is set, read as a scene's `[[meshes]]` entry reads it.
+pub fn ply_load(data: &[u8]) -> Result<(), String> {
+    let Some((&mode, body)) = data.split_first() else {
+        return Err("empty".into());
+    };
+    let name = if mode & 1 == 1 {
+        "fuzz.ply.gz"
+    } else {
+        "fuzz.ply"
+    };
+    let scene = format!(
+        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 45.0\nwidth = 4\n\
+         height = 4\n[materials.m]\nmodel = \"diffuse\"\nka = [0.1, 0.1, 0.1]\n\
+         kd = [0.8, 0.8, 0.8]\n[[lights]]\nposition = [1.0, 1.0, 5.0]\ncolor = [1.0, 1.0, 1.0]\n\
+         [[meshes]]\nfile = \"{name}\"\nmaterial = \"m\"\nsmooth = {}\nrotate = [10.0, 20.0, 30.0]\n",
+        mode & 2 == 2
+    );
+    let body = body.to_vec();
+    load_checked(&scene, &move |_: &Path| Ok(body.clone()))
+}
+
+/// Target `gltf_load`: a glTF (`.gltf` when the first byte is even, `.glb` when odd) of
+/// the bytes after it up to the first 0xFF, and the bytes after that as every other file
+/// it names (an external buffer, an image), read as a `[[meshes]]` entry without a
+/// material (the file's own).
+pub fn gltf_load(data: &[u8]) -> Result<(), String> {
+    let Some((&mode, rest)) = data.split_first() else {
+        return Err("empty".into());
+    };
+    let name = if mode & 1 == 1 {
+        "fuzz.glb"
+    } else {
+        "fuzz.gltf"
+    };
+    let (main, other) = split_ff(rest);
+    let scene = format!(
+        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 45.0\nwidth = 4\n\
+         height = 4\n[[lights]]\nposition = [1.0, 1.0, 5.0]\ncolor = [1.0, 1.0, 1.0]\n\
+         [[meshes]]\nfile = \"{name}\"\nsmooth = {}\n",
+        mode & 2 == 2
+    );
+    let (main, other) = (main.to_vec(), other.to_vec());
+    let name = name.to_owned();
+    load_checked(&scene, &move |p: &Path| {
+        Ok(if p.file_name().is_some_and(|f| f == name.as_str()) {
+            main.clone()
+        } else {
+            other.clone()
+        })
+    })
+}
+
+/// Target `texture_load`: the bytes after the first as a material's `map_kd` (named
+/// `.png` when the first byte is even, `.jpg` when odd) on a triangle with texture
+/// coordinates, decoded through glint's loader and its limits.
+pub fn texture_load(data: &[u8]) -> Result<(), String> {
+    let Some((&mode, body)) = data.split_first() else {
+        return Err("empty".into());
+    };
+    let name = if mode & 1 == 1 {
+        "fuzz.jpg"
+    } else {
+        "fuzz.png"
+    };
+    let scene = format!(
+        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 45.0\nwidth = 4\n\
+         height = 4\n[materials.t]\nmodel = \"ambient\"\nka = [1.0, 1.0, 1.0]\n\
+         map_kd = \"{name}\"\n[[triangles]]\n\
+         vertices = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]]\n\
+         material = \"t\"\nuvs = [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]]\n"
+    );
+    let body = body.to_vec();
+    load_checked(&scene, &move |_: &Path| Ok(body.clone()))
 }

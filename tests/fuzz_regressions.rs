@@ -37,3 +37,42 @@ fn short_mtl_colour_is_an_error_naming_the_line() {
         "{e}"
     );
 }
+
+/// The mesh and texture harnesses on their seed corpora (`fuzz/corpus/TARGET/`, made from
+/// small valid files): each seed is accepted (and checked: finite vertices, indices in
+/// range), and every cut of it (its first k bytes, k over a spread of lengths) is accepted
+/// or refused naming the scene file and a line, never a panic. The harnesses check those
+/// invariants themselves and panic where one fails.
+#[test]
+fn the_mesh_and_texture_harnesses_take_their_seeds_and_every_cut_of_them() {
+    use glint::fuzzing::{gltf_load, ply_load, texture_load};
+    type Harness = fn(&[u8]) -> Result<(), String>;
+    let targets: [(&str, Harness); 3] = [
+        ("ply_load", ply_load),
+        ("gltf_load", gltf_load),
+        ("texture_load", texture_load),
+    ];
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus");
+    for (target, harness) in targets {
+        let mut seeds = 0;
+        for entry in std::fs::read_dir(root.join(target)).unwrap() {
+            let path = entry.unwrap().path();
+            let data = std::fs::read(&path).unwrap();
+            harness(&data).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let mut refused = 0;
+            for k in (0..data.len()).step_by((data.len() / 97).max(1)) {
+                refused += harness(&data[..k]).is_err() as usize;
+            }
+            assert!(refused > 0, "{}: no cut was refused", path.display());
+            seeds += 1;
+        }
+        assert!(seeds >= 1, "{target}: no seeds");
+    }
+}
+
+/// The twin of the harnesses' own checks: a refusal that names no line is caught.
+#[test]
+#[should_panic(expected = "names no line")]
+fn a_refusal_without_a_line_is_a_finding() {
+    glint::fuzzing::check_refused("fuzz.toml: meshes[0].file: bad");
+}
