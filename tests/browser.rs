@@ -187,8 +187,10 @@ fn native(name: &str, toml: Option<&str>, dir: &Path) -> (u32, u32, Vec<u8>) {
         }
     };
     let out = dir.join(format!("{name}-native.png"));
+    // The page draws the linear bytes on its canvas whatever the scene's `[output]
+    // encoding`, which is a PNG file's (the textured scene's is sRGB).
     let s = glint_command()
-        .args(["render", "--backend", "cpu", "-o"])
+        .args(["render", "--backend", "cpu", "--encoding", "linear", "-o"])
         .arg(&out)
         .arg(&scene)
         .output()
@@ -209,8 +211,8 @@ fn differences(a: &[u8], b: &[u8]) -> (usize, usize) {
     n
 }
 
-/// The wasm CPU tracer's image of every scene the page offers is `glint render`'s PNG in
-/// every byte; the twin: bb8 with its camera moved is not.
+/// The wasm CPU tracer's image of every scene the page offers is `glint render`'s linear
+/// PNG in every byte; the twin: bb8 with its camera moved is not.
 #[test]
 #[ignore = "needs web/dist, node and chromium: run by .ci/test.sh's pass 5 with --ignored"]
 fn wasm_cpu_images_are_the_native_pngs() {
