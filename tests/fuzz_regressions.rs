@@ -38,7 +38,7 @@ fn short_mtl_colour_is_an_error_naming_the_line() {
     );
 }
 
-/// The mesh and texture harnesses on their seed corpora (`fuzz/corpus/TARGET/`, made from
+/// The mesh and texture harnesses on their seed corpora (`fuzz/seeds/TARGET/`, made from
 /// small valid files): each seed is accepted (and checked: finite vertices, indices in
 /// range), and every cut of it (its first k bytes, k over a spread of lengths) is accepted
 /// or refused naming the scene file and a line, never a panic. The harnesses check those
@@ -52,7 +52,7 @@ fn the_mesh_and_texture_harnesses_take_their_seeds_and_every_cut_of_them() {
         ("gltf_load", gltf_load),
         ("texture_load", texture_load),
     ];
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds");
     for (target, harness) in targets {
         let mut seeds = 0;
         for entry in std::fs::read_dir(root.join(target)).unwrap() {
