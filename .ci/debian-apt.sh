@@ -47,7 +47,27 @@ private_apt() {
         -o "Debug::NoLocking=1"
         -o "APT::Get::List-Cleanup=0"
         -o "APT::Sandbox::User=$(id -un)"
+        -o "Acquire::Retries=3"
     )
+}
+
+# `apt-get update` with the private configuration (apt_opts), tried again with a growing
+# pause while the archive fails: a mirror that answers 503 leaves the lists incomplete with
+# only a warning and exit status 0, and a package then seems missing. `what` names the
+# lists in messages. Needs the caller's `say` and `die`.
+apt_update() { # what
+    local err k
+    for k in 1 2 3 4 5; do
+        if err="$(apt-get "${apt_opts[@]}" update -qq 2>&1)" && ! grep -q '^W: Failed to fetch' <<<"$err"; then
+            [ -z "$err" ] || echo "$err" >&2
+            return 0
+        fi
+        echo "$err" >&2
+        [ "$k" = 5 ] && break
+        say "apt-get update of $1 failed (attempt $k of 5); trying again in $((10 * k)) s"
+        sleep $((10 * k))
+    done
+    die "apt-get update of $1 failed 5 times (the archive's answers above)"
 }
 
 # The newest version of PKG that the private configuration's SUITE offers.
@@ -74,7 +94,7 @@ trixie_keyring() {
         say "the system's debian-archive-keyring lacks trixie's keys; fetching bookworm's newest"
         private_apt "$kdir/apt" "deb [signed-by=$system target=Packages] $uri bookworm main" \
             "deb [signed-by=$system target=Packages] $uri bookworm-updates main"
-        apt-get "${apt_opts[@]}" update -qq >&2 || die "apt-get update of bookworm failed"
+        apt_update bookworm
         v="$(apt-cache "${apt_opts[@]}" policy debian-archive-keyring 2>/dev/null |
             awk '/Candidate:/ { print $2 }')"
         dpkg --compare-versions "${v:-0}" ge 2023.3+deb12u1 ||
@@ -119,5 +139,5 @@ trixie_apt() {
         -o "APT::Install-Suggests=0"
     )
     say "fetching the trixie and trixie-backports package lists (private apt configuration in $apt_dir)"
-    apt-get "${apt_opts[@]}" update -qq >&2 || die "apt-get update of trixie and trixie-backports failed"
+    apt_update "trixie and trixie-backports"
 }

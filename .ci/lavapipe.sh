@@ -129,7 +129,7 @@ fetch_25() {
     apt_dir="$dir/apt"
     private_apt "$apt_dir" "deb [signed-by=$keyring target=Packages] $uri bookworm-backports main"
     say "fetching the bookworm-backports package lists (private apt configuration in $apt_dir)"
-    apt-get "${apt_opts[@]}" update -qq >&2 || die "apt-get update of bookworm-backports failed"
+    apt_update bookworm-backports
     debs="$dir/debs"
     rm -rf "$debs" "$root" "$dir/version"
     mkdir -p "$debs" "$root"
