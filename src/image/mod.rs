@@ -1,10 +1,9 @@
 //! Images: linear f32 RGB plus the hit distance per pixel, 8-bit output, and PNG files
 //! written so that an interrupted render never leaves half an image.
 
-mod encoding;
 mod exr;
 
-pub use encoding::{Encoding, SRGB_THRESHOLDS, UnknownEncoding, to_u8_srgb};
+pub use crate::shared::encoding::{Encoding, SRGB_THRESHOLDS, UnknownEncoding, to_u8_srgb};
 pub use exr::ExrStream;
 
 use std::path::{Path, PathBuf};

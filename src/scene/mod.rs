@@ -285,7 +285,7 @@ pub struct Scene {
     pub camera: Camera,
     /// How a PNG's bytes encode the linear image (`[output] encoding`, default linear);
     /// EXR and in-memory images are always linear.
-    pub encoding: crate::image::Encoding,
+    pub encoding: crate::shared::encoding::Encoding,
     /// Point lights.
     pub lights: Vec<Light>,
     /// Materials: the file's, sorted by name, then those of MTL files.
@@ -951,7 +951,7 @@ impl Validator<'_> {
                     Ok(e) => e,
                     Err(m) => return self.err(e.span(), "output.encoding", m.to_string()),
                 },
-                None => crate::image::Encoding::Linear,
+                None => crate::shared::encoding::Encoding::Linear,
             },
             lights,
             materials,

@@ -6,7 +6,7 @@
 //! The sRGB bytes come from a table of 255 f32 thresholds, not from `powf`: a byte is the
 //! number of thresholds at or below the value, so it is the same on every machine, in the
 //! browser and under any libm. Each threshold is the smallest f32 whose exact sRGB value,
-//! times 255, rounds (half up, as [`crate::image::to_u8`]) to that byte or above; a test
+//! times 255, rounds (half up, as [`crate::shared::real::to_u8`]) to that byte or above; a test
 //! rebuilds the table from the curve in f64.
 
 use std::fmt;
@@ -15,7 +15,7 @@ use std::str::FromStr;
 /// The transfer from linear colour to a PNG's bytes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Encoding {
-    /// Linear values scaled to 8 bits ([`crate::image::to_u8`]).
+    /// Linear values scaled to 8 bits ([`crate::shared::real::to_u8`]).
     #[default]
     Linear,
     /// The sRGB transfer curve (IEC 61966-2-1), then 8 bits; the PNG says so (`sRGB`).
@@ -38,7 +38,7 @@ impl Encoding {
     #[inline]
     pub fn byte(self, x: f32) -> u8 {
         match self {
-            Encoding::Linear => crate::image::to_u8(x),
+            Encoding::Linear => crate::shared::real::to_u8(x),
             Encoding::Srgb => to_u8_srgb(x),
         }
     }
