@@ -49,10 +49,7 @@ rotate = [10.0, 20.0, 30.0]
 /// Target `obj_load`: the bytes up to the first 0xFF as an OBJ, the rest as any MTL it
 /// names, read as a scene's `[[meshes]]` entry reads them.
 pub fn obj_load(data: &[u8]) -> Result<(), String> {
-    let (obj, mtl) = match data.iter().position(|&b| b == 0xff) {
-        Some(k) => (&data[..k], &data[k + 1..]),
-        None => (data, &[][..]),
-    };
+    let (obj, mtl) = split_ff(data);
     let files = |p: &Path| -> Result<Vec<u8>, ReadError> {
         Ok(if p.extension().is_some_and(|e| e == "obj") {
             obj.to_vec()
@@ -126,6 +123,10 @@ fn load_checked(scene: &str, files: &ReadFile<'_>) -> Result<(), String> {
     }
 }
 
+/// The camera of the mesh and texture harnesses' scenes: 4×4 pixels looking down −z.
+const SMALL_CAMERA: &str = "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+    fov = 45.0\nwidth = 4\nheight = 4\n";
+
 /// The bytes up to the first 0xFF, and those after it (empty without one).
 fn split_ff(data: &[u8]) -> (&[u8], &[u8]) {
     match data.iter().position(|&b| b == 0xff) {
@@ -147,8 +148,7 @@ pub fn ply_load(data: &[u8]) -> Result<(), String> {
         "fuzz.ply"
     };
     let scene = format!(
-        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 45.0\nwidth = 4\n\
-         height = 4\n[materials.m]\nmodel = \"diffuse\"\nka = [0.1, 0.1, 0.1]\n\
+        "{SMALL_CAMERA}[materials.m]\nmodel = \"diffuse\"\nka = [0.1, 0.1, 0.1]\n\
          kd = [0.8, 0.8, 0.8]\n[[lights]]\nposition = [1.0, 1.0, 5.0]\ncolor = [1.0, 1.0, 1.0]\n\
          [[meshes]]\nfile = \"{name}\"\nmaterial = \"m\"\nsmooth = {}\nrotate = [10.0, 20.0, 30.0]\n",
         mode & 2 == 2
@@ -172,8 +172,7 @@ pub fn gltf_load(data: &[u8]) -> Result<(), String> {
     };
     let (main, other) = split_ff(rest);
     let scene = format!(
-        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 45.0\nwidth = 4\n\
-         height = 4\n[[lights]]\nposition = [1.0, 1.0, 5.0]\ncolor = [1.0, 1.0, 1.0]\n\
+        "{SMALL_CAMERA}[[lights]]\nposition = [1.0, 1.0, 5.0]\ncolor = [1.0, 1.0, 1.0]\n\
          [[meshes]]\nfile = \"{name}\"\nsmooth = {}\n",
         mode & 2 == 2
     );
@@ -201,8 +200,7 @@ pub fn texture_load(data: &[u8]) -> Result<(), String> {
         "fuzz.png"
     };
     let scene = format!(
-        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov = 45.0\nwidth = 4\n\
-         height = 4\n[materials.t]\nmodel = \"ambient\"\nka = [1.0, 1.0, 1.0]\n\
+        "{SMALL_CAMERA}[materials.t]\nmodel = \"ambient\"\nka = [1.0, 1.0, 1.0]\n\
          map_kd = \"{name}\"\n[[triangles]]\n\
          vertices = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]]\n\
          material = \"t\"\nuvs = [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]]\n"

@@ -18,7 +18,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use toml::de::{DeTable, DeValue};
+use toml::de::{DeArray, DeTable, DeValue};
 
 /// One step of a key's path.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -53,19 +53,7 @@ pub struct SetError {
 impl Setting {
     /// The key's path as scene errors name keys (`lights[0].color`).
     pub fn key(&self) -> String {
-        let mut s = String::new();
-        for step in &self.path {
-            match step {
-                Step::Key(k) => {
-                    if !s.is_empty() {
-                        s.push('.');
-                    }
-                    s.push_str(k);
-                }
-                Step::Index(i) => s.push_str(&format!("[{i}]")),
-            }
-        }
-        s
+        path_key(&self.path)
     }
 
     /// The value as it is written into the scene (TOML).
@@ -152,6 +140,23 @@ impl FromStr for Setting {
     }
 }
 
+/// A path as scene errors name keys (`lights[0].color`).
+fn path_key(path: &[Step]) -> String {
+    let mut s = String::new();
+    for step in path {
+        match step {
+            Step::Key(k) => {
+                if !s.is_empty() {
+                    s.push('.');
+                }
+                s.push_str(k);
+            }
+            Step::Index(i) => s.push_str(&format!("[{i}]")),
+        }
+    }
+    s
+}
+
 /// Where a line of the text with settings came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Origin {
@@ -236,15 +241,10 @@ fn apply_one(applied: &mut Applied, index: usize, s: &Setting) -> Result<(), Set
     // Walk to the table that holds the key: its span and contents.
     let mut table: &DeTable<'_> = root.get_ref();
     let mut span: Option<std::ops::Range<usize>> = None;
-    let mut walked = Vec::new();
+    // The array of tables a key step found, for the index step after it.
+    let mut array: Option<&DeArray<'_>> = None;
     for (n, step) in parents.iter().enumerate() {
-        walked.push(step.clone());
-        let here = Setting {
-            arg: String::new(),
-            path: walked.clone(),
-            value: String::new(),
-        }
-        .key();
+        let here = path_key(&parents[..=n]);
         match step {
             Step::Key(k) => match table.get(k.as_str()) {
                 Some(v) => match v.get_ref() {
@@ -262,7 +262,7 @@ fn apply_one(applied: &mut Applied, index: usize, s: &Setting) -> Result<(), Set
                                 "{here} is an array: give an index, e.g. {here}[0]"
                             )));
                         }
-                        // The index step below reads the array.
+                        array = Some(items);
                         span = Some(v.span());
                     }
                     _ => return Err(s.error(format!("{here} is not a table"))),
@@ -278,10 +278,7 @@ fn apply_one(applied: &mut Applied, index: usize, s: &Setting) -> Result<(), Set
                 let Step::Key(name) = &parents[n - 1] else {
                     unreachable!("an index follows a key")
                 };
-                let Some(DeValue::Array(items)) = prev_table_get(&root, &parents[..n - 1])
-                    .and_then(|t| t.get(name.as_str()))
-                    .map(|v| v.get_ref())
-                else {
+                let Some(items) = array.take() else {
                     return Err(s.error(format!("{name} is not an array")));
                 };
                 let Some(item) = items.get(*i) else {
@@ -342,12 +339,7 @@ fn apply_one(applied: &mut Applied, index: usize, s: &Setting) -> Result<(), Set
                 Ok(())
             }
             _ => {
-                let table = Setting {
-                    arg: String::new(),
-                    path: parents.to_vec(),
-                    value: String::new(),
-                }
-                .key();
+                let table = path_key(parents);
                 Err(s.error(format!(
                     "{table} has no header of its own ([{table}]: it is written with dotted \
                      keys or only through tables inside it); add one, or set a key it has"
@@ -377,31 +369,6 @@ fn own_header(text: &str, parents: &[Step]) -> bool {
         })
         .collect();
     name == keys.join(".")
-}
-
-/// The table at `path` (keys only) from `root`.
-fn prev_table_get<'a, 'i>(
-    root: &'a toml::Spanned<DeTable<'i>>,
-    path: &[Step],
-) -> Option<&'a DeTable<'i>> {
-    let mut t: &DeTable<'i> = root.get_ref();
-    let mut steps = path.iter().peekable();
-    while let Some(step) = steps.next() {
-        let Step::Key(k) = step else { return None };
-        let v = t.get(k.as_str())?;
-        t = match (v.get_ref(), steps.peek()) {
-            (DeValue::Table(inner), _) => inner,
-            (DeValue::Array(items), Some(Step::Index(i))) => {
-                steps.next();
-                match items.get(*i)?.get_ref() {
-                    DeValue::Table(inner) => inner,
-                    _ => return None,
-                }
-            }
-            _ => return None,
-        };
-    }
-    Some(t)
 }
 
 /// Writes `line` as line `at` (0-based) of the text, moving the rest down.
@@ -438,12 +405,7 @@ fn append_table(
     parents: &[Step],
     key: &str,
 ) -> Result<(), SetError> {
-    let header = Setting {
-        arg: String::new(),
-        path: parents.to_vec(),
-        value: String::new(),
-    }
-    .key();
+    let header = path_key(parents);
     let last = applied.origins.len();
     let sep = if applied.text.is_empty() || applied.text.ends_with('\n') {
         ""
