@@ -63,16 +63,16 @@ if [ -z "${XDG_RUNTIME_DIR:-}" ]; then
 fi
 
 cargo fmt --all --check
-cargo clippy --workspace --all-targets --locked -- -D warnings
-cargo build --locked --examples
-RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked --quiet
+cargo clippy --workspace --all-targets --locked --features glint/view -- -D warnings
+cargo build --locked --features view --examples
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked --features view --quiet
 
 summary=()
 adapter_line() {
     # The adapter the GPU tests will use, as the adapter reports it.
-    cargo run --locked --quiet -- adapters | grep -i -m1 -- "$GLINT_ADAPTER" || {
+    cargo run --locked --quiet --features view -- adapters | grep -i -m1 -- "$GLINT_ADAPTER" || {
         echo "glint: no adapter matching GLINT_ADAPTER=$GLINT_ADAPTER:" >&2
-        cargo run --locked --quiet -- adapters >&2 || true
+        cargo run --locked --quiet --features view -- adapters >&2 || true
         return 1
     }
 }
@@ -88,7 +88,7 @@ else
     }
     echo "=== pass 1: the whole suite on $line1 ==="
 fi
-cargo test --locked --no-fail-fast 2>&1 | tee /tmp/glint-pass1.log
+cargo test --locked --features view --no-fail-fast 2>&1 | tee /tmp/glint-pass1.log
 [ "${PIPESTATUS[0]}" = 0 ] || exit 1
 summary+=("pass 1 ($([ "$skip_gpu" = 1 ] && echo 'GPU SKIPPED' || echo "$line1")): $(grep -c '^test .* ok$' /tmp/glint-pass1.log) tests ok in $((SECONDS - start)) s")
 
@@ -106,7 +106,7 @@ python3 -m venv .cache/pyenv
 .cache/pyenv/bin/pip install --quiet --upgrade pip
 echo "=== pass 4: pip install ./python[test], then pytest python/tests ==="
 .cache/pyenv/bin/pip install --quiet "./python[test]"
-cargo build --locked --quiet # the command line the tests compare with
+cargo build --locked --features view --quiet # the command line the tests compare with
 GLINT_BIN="$PWD/target/debug/glint" .cache/pyenv/bin/python -m pytest python/tests 2>&1 |
     tee /tmp/glint-pass4.log
 [ "${PIPESTATUS[0]}" = 0 ] || exit 1
@@ -133,7 +133,7 @@ bash web/build.sh
 if compgen -G "$(rustc --print target-libdir --target wasm32-unknown-unknown 2>/dev/null)/libstd-*.rlib" >/dev/null; then
     CARGO_TARGET_DIR=target/wasm cargo clippy --locked -p glint-web --target wasm32-unknown-unknown -- -D warnings
 fi
-cargo test --locked --test browser -- --ignored 2>&1 | tee /tmp/glint-pass5.log
+cargo test --locked --features view --test browser -- --ignored 2>&1 | tee /tmp/glint-pass5.log
 [ "${PIPESTATUS[0]}" = 0 ] || exit 1
 summary+=("pass 5 (browser: $(chromium --version 2>/dev/null)): $(grep -c '^test .* ok$' /tmp/glint-pass5.log) tests ok in $((SECONDS - start)) s")
 
@@ -161,7 +161,7 @@ driver_pass() { # pass number, Mesa major
         echo "=== pass $n: the GPU test binaries on $line ==="
         # Mesa >= 24.1's lavapipe has ray queries: the ray-query tracer's tests must run here.
         GLINT_EXPECT_RAY_QUERY=1 GLINT_EXPECT_DRIVER="Mesa ${GLINT_MESA_VERSION%%-*}" \
-            cargo test --locked --no-fail-fast "${gpu_bins[@]}" 2>&1 |
+            cargo test --locked --features view --no-fail-fast "${gpu_bins[@]}" 2>&1 |
             tee "/tmp/glint-pass$n.log"
         [ "${PIPESTATUS[0]}" = 0 ] || exit 1
         echo "$line" >"/tmp/glint-pass$n.adapter"

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use crate::bvh::Bvh;
 use crate::scene::{Model, Scene, TriangleAlgorithm};
+use crate::stages::{Stages, Timings};
 
 /// Everything a tracer reads, flattened: what goes into the GPU's buffers.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,6 +48,9 @@ pub struct SceneBuffers {
     pub triangle_algo: u32,
     /// Whether shadow rays are traced.
     pub shadows: bool,
+    /// How long flattening and the BVH (built, or read from the cache) took; compares
+    /// equal whatever it holds ([`Timings`]).
+    pub stages: Timings,
 }
 
 /// The integer form of a Phong exponent for `Material::n_int`.
@@ -68,8 +72,9 @@ pub fn camera_basis(eye: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> [[f32; 3]
 impl SceneBuffers {
     /// Flattens a validated scene at `width`×`height` pixels with the given triangle algorithm.
     pub fn new(scene: &Scene, width: u32, height: u32, algo: TriangleAlgorithm) -> Self {
-        let (triangles, normals) = flat_triangles(&scene.triangles, &scene.smooth);
-        Self::with_triangles(scene, triangles, normals, width, height, algo, None).0
+        let stages = Stages::new();
+        let flat = flat_triangles(&scene.triangles, &scene.smooth, &stages);
+        Self::with_triangles(scene, flat, (width, height), algo, None, stages).0
     }
 
     /// [`SceneBuffers::new`] for a scene that replaces the one `old` was made from (a file
@@ -83,8 +88,9 @@ impl SceneBuffers {
         algo: TriangleAlgorithm,
         old: SceneBuffers,
     ) -> (Self, bool) {
-        let (triangles, normals) = flat_triangles(&scene.triangles, &scene.smooth);
-        Self::with_triangles(scene, triangles, normals, width, height, algo, Some(old))
+        let stages = Stages::new();
+        let flat = flat_triangles(&scene.triangles, &scene.smooth, &stages);
+        Self::with_triangles(scene, flat, (width, height), algo, Some(old), stages)
     }
 
     /// The camera and frame size in `params` made `cam`'s at `width`×`height`, exactly as
@@ -111,21 +117,22 @@ impl SceneBuffers {
             std::mem::take(&mut scene.triangles),
             std::mem::take(&mut scene.smooth),
         );
-        let (triangles, normals) = flat_triangles(&scene_triangles, &smooth);
+        let stages = Stages::new();
+        let flat = flat_triangles(&scene_triangles, &smooth, &stages);
         drop((scene_triangles, smooth));
-        Self::with_triangles(scene, triangles, normals, width, height, algo, None).0
+        Self::with_triangles(scene, flat, (width, height), algo, None, stages).0
     }
 
     /// The buffers of `scene` whose triangles (and normals) are already flat; the BVH
     /// taken from `old` where it was made from the same primitives (then `true`).
+    /// Its stages (flatten, BVH) are timed into `stages`, which the buffers keep.
     fn with_triangles(
         scene: &Scene,
-        mut triangles: Vec<Triangle>,
-        normals: Vec<VertexNormals>,
-        width: u32,
-        height: u32,
+        (mut triangles, normals): (Vec<Triangle>, Vec<VertexNormals>),
+        (width, height): (u32, u32),
         algo: TriangleAlgorithm,
         old: Option<SceneBuffers>,
+        stages: Stages,
     ) -> (Self, bool) {
         let t_flat = web_time::Instant::now();
         let uvs = triangle_uvs(&mut triangles, &scene.uvs, &scene.materials);
@@ -170,12 +177,13 @@ impl SceneBuffers {
             .collect();
         let lights: Vec<Light> = scene.lights.iter().map(light).collect();
         let texels = texture_buffers(&scene.textures);
-        crate::stages::record("flatten", t_flat.elapsed());
+        stages.record("flatten", t_flat.elapsed());
         if let Some(old) = old.filter(|o| o.spheres == spheres && o.triangles == triangles) {
             let buf = SceneBuffers {
                 normals,
                 uvs,
                 texels,
+                stages: Timings(stages.into_times()),
                 ..SceneBuffers::with_bvh(
                     params,
                     spheres,
@@ -195,6 +203,7 @@ impl SceneBuffers {
             texels,
             ..SceneBuffers::assemble_cached(
                 scene.cache.as_deref(),
+                stages,
                 params,
                 spheres,
                 triangles,
@@ -209,23 +218,21 @@ impl SceneBuffers {
 
     /// For the CPU's packet tracer only: `triangles[prim_ids[k]]` at k (a zeroed triangle
     /// where a sphere is), so that it reads a leaf's triangles from consecutive memory.
-    /// Made on the first call (its time counted in the "flatten" stage), so that a render
-    /// on the GPU, which never reads it, never holds this second copy of the triangles
-    /// (40 MB for the dragon).
+    /// Made on the first call (by the CPU tracer before its first row, so its time is
+    /// the trace's), so that a render on the GPU, which never reads it, never holds this
+    /// second copy of the triangles (40 MB for the dragon).
     pub fn leaf_triangles(&self) -> &[Triangle] {
         self.leaf_triangles.get_or_init(|| {
-            crate::stages::time("flatten", || {
-                self.prim_ids
-                    .par_iter()
-                    .map(|&id| {
-                        if (id & TRIANGLE_BIT) != 0 {
-                            self.triangles[(id & !TRIANGLE_BIT) as usize]
-                        } else {
-                            Triangle::default()
-                        }
-                    })
-                    .collect()
-            })
+            self.prim_ids
+                .par_iter()
+                .map(|&id| {
+                    if (id & TRIANGLE_BIT) != 0 {
+                        self.triangles[(id & !TRIANGLE_BIT) as usize]
+                    } else {
+                        Triangle::default()
+                    }
+                })
+                .collect()
         })
     }
 
@@ -256,15 +263,25 @@ impl SceneBuffers {
         shadows: bool,
     ) -> Self {
         Self::assemble_cached(
-            None, params, spheres, triangles, materials, lights, algo, shadows,
+            None,
+            Stages::new(),
+            params,
+            spheres,
+            triangles,
+            materials,
+            lights,
+            algo,
+            shadows,
         )
     }
 
     /// [`SceneBuffers::assemble`], the BVH read from `cache` or stored there when it holds
-    /// it or the scene is worth it (a scene's [`Scene::cache`]).
+    /// it or the scene is worth it (a scene's [`Scene::cache`]); its stages timed into
+    /// `stages`, which the buffers keep.
     #[allow(clippy::too_many_arguments)]
     fn assemble_cached(
         cache: Option<&crate::cache::Cache>,
+        stages: Stages,
         params: Params,
         spheres: Vec<Sphere>,
         triangles: Vec<Triangle>,
@@ -273,17 +290,20 @@ impl SceneBuffers {
         algo: TriangleAlgorithm,
         shadows: bool,
     ) -> Self {
-        let bvh = cached_bvh(cache, &spheres, &triangles);
-        SceneBuffers::with_bvh(
-            params,
-            spheres,
-            triangles,
-            materials,
-            lights,
-            (bvh.nodes, bvh.prim_ids),
-            algo,
-            shadows,
-        )
+        let bvh = cached_bvh(cache, &stages, &spheres, &triangles);
+        SceneBuffers {
+            stages: Timings(stages.into_times()),
+            ..SceneBuffers::with_bvh(
+                params,
+                spheres,
+                triangles,
+                materials,
+                lights,
+                (bvh.nodes, bvh.prim_ids),
+                algo,
+                shadows,
+            )
+        }
     }
 
     /// The buffers of these parts over the BVH `(nodes, prim_ids)` built for them: the
@@ -321,6 +341,7 @@ impl SceneBuffers {
             leaf_triangles: std::sync::OnceLock::new(),
             triangle_algo: algo.code(),
             shadows,
+            stages: Timings::default(),
         }
     }
 }
@@ -593,12 +614,13 @@ fn light(l: &crate::scene::Light) -> Light {
 /// there is a cache and the scene is large enough to be worth it).
 fn cached_bvh(
     cache: Option<&crate::cache::Cache>,
+    stages: &Stages,
     spheres: &[Sphere],
     triangles: &[Triangle],
 ) -> Bvh {
     let n = spheres.len() + triangles.len();
     let Some(cache) = cache.filter(|c| c.worth(n)) else {
-        return crate::stages::time("BVH build", || Bvh::build(spheres, triangles));
+        return stages.time("BVH build", || Bvh::build(spheres, triangles));
     };
     let key = crate::cache::Key::new(
         "bvh",
@@ -607,7 +629,7 @@ fn cached_bvh(
             bytemuck::cast_slice(triangles),
         ],
     );
-    let hit = crate::stages::time("cache read", || {
+    let hit = stages.time("cache read", || {
         let mut s = cache.load("bvh", &key)?.into_iter();
         let (nodes, prim_ids, stats) = (s.next()?, s.next()?, s.next()?);
         Some(Bvh {
@@ -620,8 +642,8 @@ fn cached_bvh(
     if let Some(bvh) = hit.filter(|b| b.prim_ids.len() == n) {
         return bvh;
     }
-    let bvh = crate::stages::time("BVH build", || Bvh::build(spheres, triangles));
-    crate::stages::time("cache write", || {
+    let bvh = stages.time("BVH build", || Bvh::build(spheres, triangles));
+    stages.time("cache write", || {
         let stats = [bvh.depth as u32, bvh.largest_leaf as u32];
         cache.store(
             "bvh",
@@ -695,8 +717,9 @@ pub const TEXTURE_WORDS: usize = std::mem::size_of::<Texture>() / 4;
 fn flat_triangles(
     scene_triangles: &[crate::scene::Triangle],
     smooth: &[crate::scene::SmoothNormals],
+    stages: &Stages,
 ) -> (Vec<Triangle>, Vec<VertexNormals>) {
-    crate::stages::time("flatten", || {
+    stages.time("flatten", || {
         let mut triangles: Vec<Triangle> = scene_triangles
             .par_iter()
             .map(|t| Triangle {

@@ -78,22 +78,46 @@ fn run(cli: Cli) -> Result<Verdict> {
             backend,
             no_cache,
             encoding,
+            frames,
+            resume,
             frame,
             mut common,
         } => {
-            let output = output.unwrap_or_else(|| default_output(&scene));
             if let Some(e) = encoding {
                 common.set.push(format!("output.encoding={e}").parse()?);
             }
-            done(render(
-                &scene,
-                &output,
-                Chatter { verbose, quiet },
-                backend.into(),
-                no_cache,
-                frame,
-                common,
-            ))
+            let chatter = Chatter { verbose, quiet };
+            match frames {
+                Some(range) => {
+                    let Some(template) = output else {
+                        anyhow::bail!(
+                            "--frames needs -o with {{}} or {{:04}} in the file name (out/frame_{{:04}}.png)"
+                        )
+                    };
+                    let to = (template.as_path(), range, resume);
+                    done(render_frames(
+                        &scene,
+                        to,
+                        chatter,
+                        backend.into(),
+                        no_cache,
+                        frame,
+                        common,
+                    ))
+                }
+                None => {
+                    let output = output.unwrap_or_else(|| default_output(&scene));
+                    done(render(
+                        &scene,
+                        &output,
+                        chatter,
+                        backend.into(),
+                        no_cache,
+                        frame,
+                        common,
+                    ))
+                }
+            }
         }
         Command::Check {
             scenes,
@@ -124,6 +148,7 @@ fn run(cli: Cli) -> Result<Verdict> {
             man.render(&mut std::io::stdout())?;
             Ok(Verdict::Equal)
         }
+        #[cfg(feature = "view")]
         Command::View {
             scene,
             backend,
@@ -149,6 +174,11 @@ fn run(cli: Cli) -> Result<Verdict> {
                 settings: common.set,
             },
         })),
+        #[cfg(not(feature = "view"))]
+        Command::View { .. } => Err(anyhow::anyhow!(
+            "glint view: this glint was built without the viewer; build it with \
+             `--features view` (cargo install --path . --features view)"
+        )),
         Command::Bench {
             scenes,
             size,
@@ -334,6 +364,67 @@ fn render(
             total * 1e3,
             start.elapsed().as_secs_f64() * 1e3
         );
+    }
+    Ok(())
+}
+
+/// `glint render --frames`: the scene loaded once, then each frame of its camera path.
+fn render_frames(
+    scene: &Path,
+    (template, range, resume): (&Path, glint::render::FrameRange, bool),
+    chatter: Chatter,
+    backend: glint::Backend,
+    no_cache: bool,
+    frame: FrameArgs,
+    common: CommonArgs,
+) -> Result<()> {
+    glint::render::check_template(template)?;
+    glint::image::check_extension(template)?;
+    let cache = glint::cache::default_dir()
+        .filter(|_| !no_cache)
+        .map(|dir| Arc::new(Cache::new(cache_settings(dir))));
+    let _finish = FinishWrites(cache.clone());
+    let mut scene = load(scene, common.confine, cache, &common.set)?;
+    if scene.camera_keys.is_empty() && !chatter.quiet {
+        eprintln!(
+            "note: {} has no [[camera.keys]]: every frame is [camera]'s",
+            scene.path.display()
+        );
+    }
+    let renderer = Renderer::with_options(backend, &gpu_options(common.adapter.as_deref()))?;
+    let (mut written, mut kept) = (0u32, 0u32);
+    glint::render::render_frames(
+        &mut scene,
+        &renderer,
+        &options(frame),
+        (template, range, resume),
+        &mut |f, done| match done {
+            glint::render::FrameDone::Written(path, report) => {
+                written += 1;
+                // The scene's warnings are every frame's: said once.
+                if written == 1 {
+                    for w in &report.warnings {
+                        eprintln!("warning: {w}");
+                    }
+                }
+                if !chatter.quiet {
+                    println!(
+                        "frame {f}: {} ({:.1} ms)",
+                        path.display(),
+                        report.total.as_secs_f64() * 1e3
+                    );
+                }
+            }
+            glint::render::FrameDone::Kept(path) => {
+                kept += 1;
+                if chatter.verbose {
+                    println!("frame {f}: {} kept (--resume)", path.display());
+                }
+            }
+        },
+    )?;
+    if !chatter.quiet {
+        println!("{written} frames written, {kept} kept");
     }
     Ok(())
 }

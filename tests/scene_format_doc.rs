@@ -13,6 +13,7 @@ fn scene_with(at: &str, extra: &str) -> String {
             "camera",
             "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 45\nwidth = 4\nheight = 4\n",
         ),
+        ("camera.keys[]", "[[camera.keys]]\nframe = 0\n"),
         (
             "lights[]",
             "[[lights]]\ncolor = [1, 1, 1]\nposition = [0, 0, 5]\n",
@@ -75,9 +76,10 @@ fn documented_keys(text: &str) -> BTreeSet<String> {
         .collect()
 }
 
-const TABLES: [&str; 8] = [
+const TABLES: [&str; 9] = [
     "",
     "camera",
+    "camera.keys[]",
     "lights[]",
     "materials.NAME",
     "spheres[]",
@@ -103,6 +105,10 @@ fn all_parser_keys() -> BTreeSet<String> {
     ] {
         assert!(keys.remove(t), "{t} is not a top-level key of the parser");
     }
+    assert!(
+        keys.remove("camera.keys"),
+        "camera.keys is not a key of [camera]"
+    );
     keys
 }
 

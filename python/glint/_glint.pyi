@@ -56,6 +56,8 @@ class Scene:
     @camera.setter
     def camera(self, value: Dict[str, Any]) -> None:
         """Changes the camera's given parts, as with_camera does, in this scene."""
+    def camera_at(self, frame: float) -> Dict[str, Any]:
+        """The camera at a frame of the camera path ([[camera.keys]]), as camera gives it."""
     def with_camera(
         self,
         *,

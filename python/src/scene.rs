@@ -215,16 +215,22 @@ impl Scene {
     /// `KeyError`.
     #[getter]
     fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let st = self.state();
-        let c = &st.scene.camera;
-        let d = PyDict::new(py);
-        d.set_item("eye", (c.eye[0], c.eye[1], c.eye[2]))?;
-        d.set_item("look_at", (c.look_at[0], c.look_at[1], c.look_at[2]))?;
-        d.set_item("up", (c.up[0], c.up[1], c.up[2]))?;
-        d.set_item("fov", c.fov)?;
-        d.set_item("size", (c.width, c.height))?;
-        d.set_item("samples", c.samples)?;
-        Ok(d)
+        camera_dict(py, &self.state().scene.camera)
+    }
+
+    /// The camera at `frame` (fractional frames allowed) on the scene's camera path
+    /// (`[[camera.keys]]`: linear between keys, held before the first and after the last),
+    /// as a dict with `camera`'s keys; `[camera]` itself where there are no keys. The same
+    /// in every bit as `glint render --frames` uses. `scene.with_camera(**scene.camera_at(f))`
+    /// is the scene at frame `f`. A frame that is not finite, or where the path has no view,
+    /// is a `ValueError`.
+    fn camera_at<'py>(&self, py: Python<'py>, frame: f64) -> PyResult<Bound<'py, PyDict>> {
+        let c = self
+            .state()
+            .scene
+            .camera_at(frame)
+            .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+        camera_dict(py, &c)
     }
 
     /// A copy of this scene with the camera's given parts changed (the others kept): `eye`,
@@ -328,6 +334,18 @@ impl Scene {
             st.scene.spheres.len()
         )
     }
+}
+
+/// A camera as `Scene.camera` gives it.
+fn camera_dict<'py>(py: Python<'py>, c: &glint::scene::Camera) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("eye", (c.eye[0], c.eye[1], c.eye[2]))?;
+    d.set_item("look_at", (c.look_at[0], c.look_at[1], c.look_at[2]))?;
+    d.set_item("up", (c.up[0], c.up[1], c.up[2]))?;
+    d.set_item("fov", c.fov)?;
+    d.set_item("size", (c.width, c.height))?;
+    d.set_item("samples", c.samples)?;
+    Ok(d)
 }
 
 /// Parts of a camera to change (`None`: kept).

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import glint
-from conftest import ROOT, SCENES, glint_bin, same_bits
+from conftest import ROOT, SCENES, glint_bin, run_cli, same_bits
 
 GOOD = {
     "ambient": [0.2, 0.2, 0.2],
@@ -173,3 +173,29 @@ def test_load_caches_as_the_command_line_does(tmp_path, monkeypatch):
     assert not (tmp_path / "cache").exists()
     glint.render(glint.Scene.load(scene), backend="cpu")
     assert (tmp_path / "cache").is_dir() and any((tmp_path / "cache").rglob("*"))
+
+
+def test_camera_at_is_the_clis_frame_in_every_bit(tmp_path):
+    # bb8 with a camera path; frame 5 of `glint render --frames` against the scene moved
+    # to camera_at(5) and rendered here.
+    text = (SCENES / "bb8.toml").read_text() + (
+        "\n[[camera.keys]]\nframe = 0\n"
+        "\n[[camera.keys]]\nframe = 8\neye = [6.0, 3.0, 9.0]\nfov = 30.0\n")
+    path = tmp_path / "path.toml"
+    path.write_text(text)
+    s = glint.Scene.load(path, cache=False)
+    c = s.camera_at(5)
+    assert set(c) == set(s.camera)
+    assert s.camera_at(0) == s.camera and s.camera_at(-3) == s.camera
+    assert s.camera_at(4)["fov"] == 37.5  # halfway between 45 and 30
+    assert s.camera_at(100) == s.camera_at(8)
+    run_cli("render", str(path), "--frames", "5", "-o", str(tmp_path / "f_{}.exr"),
+            "--backend", "cpu", "--size", "40x30", "--no-cache")
+    cli = glint.load(tmp_path / "f_5.exr")
+    mine = glint.render(s.with_camera(**c), backend="cpu", size=(40, 30))
+    assert same_bits(cli, mine)
+    # The twin: frame 4's camera is another image.
+    assert not same_bits(cli, glint.render(s.with_camera(**s.camera_at(4)), backend="cpu",
+                                           size=(40, 30)))
+    with pytest.raises(ValueError, match="not a finite number"):
+        s.camera_at(float("nan"))

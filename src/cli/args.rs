@@ -145,6 +145,14 @@ pub enum Command {
         /// GLINT_CACHE_DIR, else $XDG_CACHE_HOME/glint or ~/.cache/glint).
         #[arg(long)]
         no_cache: bool,
+        /// Frames FIRST..LAST (both included) or N of the scene's camera path
+        /// ([[camera.keys]]), each written to -o with {} or {:04} in its file name replaced
+        /// by the frame number (out/frame_{:04}.png); the BVH is built once.
+        #[arg(long, value_name = "FIRST..LAST")]
+        frames: Option<glint::render::FrameRange>,
+        /// With --frames: leave each frame whose file exists as it is.
+        #[arg(long, requires = "frames")]
+        resume: bool,
         #[command(flatten)]
         frame: FrameArgs,
         #[command(flatten)]

@@ -5,4 +5,5 @@ pub mod alloc;
 pub mod args;
 pub mod env;
 pub mod progress;
+#[cfg(feature = "view")]
 pub mod view;

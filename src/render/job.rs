@@ -13,6 +13,7 @@ use crate::buffers::{SceneBuffers, Specialisation};
 use crate::gpu::{Gpu, GpuError, GpuTimings};
 use crate::image::{Encoding, Image, ImageError};
 use crate::scene::{Scene, TriangleAlgorithm};
+use crate::stages::Stages;
 
 /// Rows per band of the GPU: large, since each dispatch and readback has a fixed cost (about
 /// 3.5 ms on lavapipe); about this many MiB of f32 pixels.
@@ -130,8 +131,10 @@ pub struct RenderReport {
     pub warnings: Vec<Warning>,
     /// The notes, in the order they came.
     pub notes: Vec<Note>,
-    /// The wall time of each stage recorded since the last report (`crate::stages`: the
-    /// scene's reading and parsing, the BVH build, the trace, the encoding, ...).
+    /// The wall time of each stage of this render ([`crate::stages`]): the scene's reading
+    /// and parsing where the job read the scene itself ([`Job::new`]; a scene the caller
+    /// lends keeps its own in [`Scene::load_stages`]), then flattening and the BVH, the
+    /// checks, the trace, the encoding and the writing.
     pub stages: Vec<(&'static str, Duration)>,
     /// From the job's start to its end.
     pub total: Duration,
@@ -193,6 +196,7 @@ pub struct Job<'a> {
     options: RenderOptions,
     events: Box<dyn FnMut(Event<'_>) + 'a>,
     cancel: Option<Arc<AtomicBool>>,
+    buffers: Option<&'a mut SceneBuffers>,
 }
 
 /// The parts of a job that its stages share.
@@ -201,6 +205,8 @@ struct Run<'j, 'a> {
     warnings: Vec<Warning>,
     notes: Vec<Note>,
     cancel: Option<&'j AtomicBool>,
+    /// This render's stage times ([`RenderReport::stages`]).
+    stages: Stages,
 }
 
 impl Run<'_, '_> {
@@ -241,6 +247,7 @@ impl<'a> Job<'a> {
             options: RenderOptions::default(),
             events: Box::new(|_| {}),
             cancel: None,
+            buffers: None,
         }
     }
 
@@ -252,12 +259,25 @@ impl<'a> Job<'a> {
             options: RenderOptions::default(),
             events: Box::new(|_| {}),
             cancel: None,
+            buffers: None,
         }
     }
 
     /// The frame's size, samples and algorithm, where they differ from the scene's.
     pub fn options(mut self, options: RenderOptions) -> Job<'a> {
         self.options = options;
+        self
+    }
+
+    /// Renders from `buffers`, made by the caller from this job's scene
+    /// ([`SceneBuffers::new`]) and kept across jobs: the job sets their camera and frame
+    /// values ([`SceneBuffers::set_camera`], then the options) and neither rebuilds nor
+    /// frees their geometry, so frames of one scene under moving cameras build the BVH
+    /// once. Buffers made with another triangle algorithm than the job's are made again.
+    /// Every other buffer must be the scene's: a job cannot check that the primitives,
+    /// materials or lights are still the ones they were made from.
+    pub fn buffers(mut self, buffers: &'a mut SceneBuffers) -> Job<'a> {
+        self.buffers = Some(buffers);
         self
     }
 
@@ -285,47 +305,70 @@ impl<'a> Job<'a> {
             options,
             mut events,
             cancel,
+            buffers,
         } = self;
         let mut run = Run {
             events: &mut *events,
             warnings: Vec::new(),
             notes: Vec::new(),
             cancel: cancel.as_deref(),
+            stages: Stages::new(),
         };
         let (mut owned, borrowed) = match scene {
             Source::Owned(s) => (Some(s), None),
             Source::Borrowed(s) => (None, Some(s)),
         };
+        if let Some(s) = &owned {
+            run.stages.record_all(&s.load_stages.0);
+        }
         let (w, h, algo) = prepare(pick(&owned, borrowed), &output, &options, &mut run)?;
         // Only the f64 tracer reads the scene's primitives once they are flat, so the
         // others take them from a scene of the job's own (the dragon's are 35 MB, a sixth
         // of the former peak).
-        let mut buf = match owned.as_deref_mut() {
-            Some(s) if !matches!(renderer.tracer(), Tracer::CpuF64) => {
-                SceneBuffers::from_scene_taking(s, w, h, algo)
+        let mut made;
+        let keep = buffers.is_some();
+        let buf: &mut SceneBuffers = match buffers {
+            Some(b) => {
+                if b.triangle_algo != algo.code() {
+                    *b = SceneBuffers::new(pick(&owned, borrowed), w, h, algo);
+                    run.stages.record_all(&b.stages.0);
+                }
+                let scene = pick(&owned, borrowed);
+                b.set_camera(&scene.camera, w, h);
+                b.params.max_depth = scene.max_depth;
+                b
             }
-            _ => SceneBuffers::new(pick(&owned, borrowed), w, h, algo),
+            None => {
+                made = match owned.as_deref_mut() {
+                    Some(s) if !matches!(renderer.tracer(), Tracer::CpuF64) => {
+                        SceneBuffers::from_scene_taking(s, w, h, algo)
+                    }
+                    _ => SceneBuffers::new(pick(&owned, borrowed), w, h, algo),
+                };
+                run.stages.record_all(&made.stages.0);
+                &mut made
+            }
         };
         let scene = pick(&owned, borrowed);
         let cache = scene.cache.as_deref();
-        options.apply(&mut buf);
+        options.apply(buf);
         run.drain_cache(cache);
         if let Some(note) = renderer.note() {
             run.note(Note::Backend(note.to_string()));
         }
         let mut sink = Sink::open(&output, w, h, scene.encoding)?;
         let math = options.math_mode();
-        let traced = trace(renderer, scene, &mut buf, math, &mut sink, &mut run)?;
+        let traced = trace(renderer, scene, buf, math, keep, &mut sink, &mut run)?;
         if run.cancelled() {
             return Err(RenderError::Cancelled);
         }
-        let image = crate::stages::time("write", || sink.finish())?;
+        let image = run.stages.time("write", || sink.finish())?;
         let t_wait = Instant::now();
         if cache.is_some_and(|c| c.finish_writes() > 0) {
-            crate::stages::record("cache wait", t_wait.elapsed());
+            run.stages.record("cache wait", t_wait.elapsed());
         }
         run.drain_cache(cache);
-        crate::stages::record("trace", traced.frame);
+        run.stages.record("trace", traced.frame);
         Ok(RenderReport {
             output,
             width: w,
@@ -339,7 +382,7 @@ impl<'a> Job<'a> {
             gpu: traced.gpu,
             warnings: run.warnings,
             notes: run.notes,
-            stages: crate::stages::take(),
+            stages: run.stages.into_times(),
             total: start.elapsed(),
             image,
         })
@@ -368,13 +411,13 @@ fn prepare(
     {
         return Err(RenderError::OverwritesScene(p.to_owned()));
     }
-    crate::stages::time("checks", || scene.validate())?;
+    run.stages.time("checks", || scene.validate())?;
     for w in &scene.warnings {
         run.warn(Warning::Scene(w.clone()));
     }
     let (w, h) = options.checked_size(scene)?;
     let algo = options.triangle.unwrap_or(scene.triangle);
-    for m in crate::stages::time("checks", || scene.range_warnings(algo)) {
+    for m in run.stages.time("checks", || scene.range_warnings(algo)) {
         run.warn(Warning::Range(m));
     }
     let band = band_rows(w, h, GPU_BAND_MIB);
@@ -397,6 +440,7 @@ fn trace(
     scene: &Scene,
     buf: &mut SceneBuffers,
     math: crate::buffers::MathMode,
+    keep: bool,
     sink: &mut Sink,
     run: &mut Run<'_, '_>,
 ) -> Result<Traced, RenderError> {
@@ -423,7 +467,7 @@ fn trace(
         Tracer::CpuF64 => cpu(true, buf, sink, run),
         Tracer::Gpu(gpu) | Tracer::GpuRq(gpu) => {
             let rq = matches!(renderer.tracer(), Tracer::GpuRq(_));
-            match gpu_bands(gpu, rq, buf, spec, sink, run) {
+            match gpu_bands(gpu, rq, buf, spec, keep, sink, run) {
                 Err(RenderError::Gpu(e @ GpuError::TooLarge { .. }))
                     if renderer.backend() == super::Backend::Auto =>
                 {
@@ -461,7 +505,7 @@ fn cpu_bands(
             None => crate::cpu::render_f32_rows(buf, spec, y, rows),
         };
         frame += t.elapsed();
-        crate::stages::time("encode", || sink.write_rows(&px))?;
+        run.stages.time("encode", || sink.write_rows(&px))?;
         y += rows;
         (run.events)(Event::Rows { done: y, total: h });
     }
@@ -471,12 +515,13 @@ fn cpu_bands(
 /// The frame on the GPU (the ray-query tracer where `rq`), in tiles written to `sink` as
 /// they are read back. A PNG's tiles are packed to 8 bits by the shader, and the host's
 /// geometry is freed once uploaded (except where the upload fails, so the CPU can still
-/// trace `buf`).
+/// trace `buf`, or where the caller keeps `buf` for more frames: `keep`).
 fn gpu_bands(
     gpu: &Gpu,
     rq: bool,
     buf: &mut SceneBuffers,
     spec: Specialisation,
+    keep: bool,
     sink: &mut Sink,
     run: &mut Run<'_, '_>,
 ) -> Result<Traced, RenderError> {
@@ -491,13 +536,13 @@ fn gpu_bands(
     let cancel = run.cancel;
     let mut rows = |y: u32, n: usize, write: &mut dyn FnMut() -> Result<(), ImageError>| {
         if written.is_ok() && !cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-            written = crate::stages::time("encode", write);
+            written = run.stages.time("encode", write);
         }
         let done = y + (n / w as usize) as u32;
         (run.events)(Event::Rows { done, total: h });
     };
     let t = match sink {
-        Sink::Png(png) if png.encoding() == Encoding::Linear => kernel
+        Sink::Png(png) if png.encoding() == Encoding::Linear && !keep => kernel
             .render_bands_rgba8_releasing(
                 &gpu.device,
                 &gpu.queue,

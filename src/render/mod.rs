@@ -7,6 +7,8 @@
 //!   happen, progress, and the timings in a [`RenderReport`].
 //! - [`Live`]: frames of one scene under a moving camera, refined while it is still, for
 //!   interactive viewers (`glint view`).
+//! - [`render_frames`]: the frames of a scene's camera path, each to its own file, the
+//!   scene's buffers made once.
 //! - [`compare()`]: the GPU against its CPU mirror and both against the f64 ground truth, as
 //!   a [`CompareReport`].
 //!
@@ -23,6 +25,7 @@
 //! ```
 
 mod compare;
+mod frames;
 mod job;
 mod live;
 mod memory;
@@ -30,6 +33,7 @@ mod output;
 mod renderer;
 
 pub use compare::{CompareReport, RayQueryResult, compare};
+pub use frames::{FrameDone, FrameRange, FramesError, check_template, frame_path, render_frames};
 pub use job::{Event, Job, Note, RenderReport, Warning};
 pub use live::{Live, Rebuilt};
 pub use memory::check_memory;

@@ -73,6 +73,24 @@ pub struct CameraFile {
     pub height: Spanned<i64>,
     /// Antialiasing: N gives N×N rays per pixel (default 1).
     pub samples: Option<Spanned<i64>>,
+    /// `[[camera.keys]]`: the camera path ([`crate::scene::camera_path`]).
+    pub keys: Option<Vec<Spanned<CameraKeyFile>>>,
+}
+
+/// `[[camera.keys]]`: one key of the camera path.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraKeyFile {
+    /// The frame number.
+    pub frame: Spanned<i64>,
+    /// Position (default: the previous key's).
+    pub eye: Option<Vec3File>,
+    /// Point looked at (default: the previous key's).
+    pub look_at: Option<Vec3File>,
+    /// Up hint (default: the previous key's).
+    pub up: Option<Vec3File>,
+    /// Vertical field of view, degrees (default: the previous key's).
+    pub fov: Option<Spanned<f32>>,
 }
 
 /// `[[lights]]`.

@@ -354,7 +354,9 @@ pub(super) fn load(
     mut out: Out<'_>,
 ) -> Result<(), SceneError> {
     let entry = Entry::new(v, i, m);
-    let raw = crate::stages::time("read", || (v.read)(&entry.obj_path))
+    let raw = v
+        .stages
+        .time("read", || (v.read)(&entry.obj_path))
         .map_err(|e| entry.fail(not_fetched(v.path, e)))?;
     let xf = mesh_transform(v, i, m)?;
     // A textured material needs the file's texture coordinates: such a mesh is neither
@@ -366,7 +368,7 @@ pub(super) fn load(
     });
     let cached = entry.cache_key(&raw, &xf).filter(|_| !named_textured);
     if let (Some(name), Some((cache, key))) = (&m.material, &cached)
-        && let Some(hit) = crate::stages::time("cache read", || CachedMesh::load(cache, key))
+        && let Some(hit) = v.stages.time("cache read", || CachedMesh::load(cache, key))
     {
         drop(raw);
         return entry.add_cached(name, hit, &mut out);
@@ -375,17 +377,24 @@ pub(super) fn load(
         let Some(name) = &m.material else {
             return Err(entry.fail(MeshError::PlyMaterial));
         };
-        let bytes = inflate(&entry.obj_path, raw, v.limit).map_err(|e| entry.fail(e))?;
-        let parsed = crate::stages::time("PLY parse", || super::ply::parse(&bytes, entry.normals))
+        let bytes = v
+            .stages
+            .time("gunzip", || inflate(&entry.obj_path, raw, v.limit))
+            .map_err(|e| entry.fail(e))?;
+        let parsed = v
+            .stages
+            .time("PLY parse", || super::ply::parse(&bytes, entry.normals))
             .map_err(|e| entry.fail(MeshError::Ply(e)))?;
         drop(bytes);
         return entry.add_parsed(name, parsed, &xf, cached, &mut out);
     }
     if entry.is_gltf() {
-        let g = crate::stages::time("glTF parse", || {
-            super::gltf::read(&raw, &entry.obj_path, v.read, entry.normals)
-        })
-        .map_err(|e| entry.fail(MeshError::Gltf(e)))?;
+        let g = v
+            .stages
+            .time("glTF parse", || {
+                super::gltf::read(&raw, &entry.obj_path, v.read, entry.normals)
+            })
+            .map_err(|e| entry.fail(MeshError::Gltf(e)))?;
         drop(raw);
         return entry.add_gltf(g, &xf, cached, &mut out);
     }
@@ -404,7 +413,9 @@ pub(super) fn load(
     if let Some(name) = m.material.as_ref().filter(|_| !named_textured) {
         let parsed = match early {
             Some(parsed) => parsed,
-            None => crate::stages::time("OBJ parse", || super::obj::parse(text, entry.normals)),
+            None => v
+                .stages
+                .time("OBJ parse", || super::obj::parse(text, entry.normals)),
         }
         .map_err(|e| entry.fail(MeshError::Obj(e)))?;
         if let Some(parsed) = parsed {
@@ -528,7 +539,7 @@ impl<'e> Entry<'e> {
             if let Some((path, bytes)) = image {
                 let id = out
                     .textures
-                    .add_bytes(&path, &bytes)
+                    .add_bytes(&path, &bytes, self.v.stages)
                     .map_err(|error| self.fail(MeshError::Texture { path, error }))?;
                 images[k] = Some(id);
             }
@@ -601,12 +612,23 @@ impl<'e> Entry<'e> {
     fn unpack(&self, raw: Vec<u8>) -> Result<(Vec<u8>, Option<ObjParse>), SceneError> {
         let is_gz = self.obj_path.extension().is_some_and(|e| e == "gz");
         let early = (self.m.material.is_some() && is_gz)
-            .then(|| gunzip_parse(&raw, self.normals, GUNZIP_PIECE, self.v.limit))
+            .then(|| {
+                gunzip_parse(
+                    &raw,
+                    self.normals,
+                    GUNZIP_PIECE,
+                    self.v.limit,
+                    self.v.stages,
+                )
+            })
             .flatten();
         Ok(match early {
             Some((bytes, parsed)) => (bytes, Some(parsed)),
             None => (
-                gunzip(&self.obj_path, raw, self.v.limit).map_err(|e| self.fail(e))?,
+                self.v
+                    .stages
+                    .time("gunzip", || gunzip(&self.obj_path, raw, self.v.limit))
+                    .map_err(|e| self.fail(e))?,
                 None,
             ),
         })
@@ -656,7 +678,10 @@ impl<'e> Entry<'e> {
         cached: Option<(&Arc<Cache>, Key)>,
         out: &mut Out<'_>,
     ) -> Result<(), SceneError> {
-        let mut placed = crate::stages::time("transform", || place_parsed(&parsed, xf, material))
+        let mut placed = self
+            .v
+            .stages
+            .time("transform", || place_parsed(&parsed, xf, material))
             .map_err(|e| self.fail(e))?;
         if let Some(own) = per_triangle {
             for (t, m) in placed.iter_mut().zip(own) {
@@ -665,13 +690,15 @@ impl<'e> Entry<'e> {
         }
         let corner = match self.normals {
             Normals::Read => Some(
-                crate::stages::time("normals", || corner_normals(&parsed, xf))
+                self.v
+                    .stages
+                    .time("normals", || corner_normals(&parsed, xf))
                     .map_err(|e| self.fail(e))?,
             ),
             Normals::Skip => None,
         };
         if let Some((cache, key)) = cached.filter(|(c, _)| c.worth(placed.len())) {
-            crate::stages::time("cache write", || {
+            self.v.stages.time("cache write", || {
                 CachedMesh::store(cache, &key, &placed, corner.as_deref(), &parsed.short_faces)
             });
         }
@@ -732,7 +759,7 @@ impl<'e> Entry<'e> {
     ) -> Result<(), SceneError> {
         let checked =
             super::obj::check(text, self.normals).map_err(|e| self.fail(MeshError::Obj(e)))?;
-        crate::stages::record("OBJ check", t_check.elapsed());
+        self.v.stages.record("OBJ check", t_check.elapsed());
         let t_parse = web_time::Instant::now();
         let (models, mtl) = self.tobj_parse(bytes)?;
         let named = match &self.m.material {
@@ -748,17 +775,20 @@ impl<'e> Entry<'e> {
         };
         self.add_mtl_materials(&mtl, out.materials, out.textures)
             .map_err(|e| self.fail(e))?;
-        crate::stages::record("OBJ parse", t_parse.elapsed());
+        self.v.stages.record("OBJ parse", t_parse.elapsed());
         let before = out.triangles.len();
         let material = |model: &tobj::Model| match (named, model.mesh.material_id) {
             (Some(k), _) => Some(k),
             (None, Some(id)) if id < mtl.len() => Some(mtl_base + id as u32),
             _ => None,
         };
-        let runs = crate::stages::time("transform", || {
-            place_models(&models, material, xf, out.triangles)
-        })
-        .map_err(|e| self.fail(e))?;
+        let runs = self
+            .v
+            .stages
+            .time("transform", || {
+                place_models(&models, material, xf, out.triangles)
+            })
+            .map_err(|e| self.fail(e))?;
         for (range, uvs) in runs {
             self.add_uvs(range, uvs, out);
         }
@@ -774,7 +804,9 @@ impl<'e> Entry<'e> {
                     }));
                 }
                 Some(
-                    crate::stages::time("normals", || corner_normals(&checked, xf))
+                    self.v
+                        .stages
+                        .time("normals", || corner_normals(&checked, xf))
                         .map_err(|e| self.fail(e))?,
                 )
             }
@@ -843,7 +875,7 @@ impl<'e> Entry<'e> {
             let Some(file) = file else { return Ok(None) };
             let path = dir.join(file.trim());
             textures
-                .add(&path, self.v.read)
+                .add(&path, self.v.read, self.v.stages)
                 .map(Some)
                 .map_err(|error| MeshError::Texture { path, error })
         };
@@ -1174,7 +1206,6 @@ fn inflate(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> 
     if path.extension().is_none_or(|e| e != "gz") {
         return Ok(raw);
     }
-    let _gunzip = Gunzip(web_time::Instant::now());
     use std::io::Read;
     let mut out = Vec::new();
     flate2::read::GzDecoder::new(&raw[..])
@@ -1188,7 +1219,6 @@ fn inflate(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> 
 }
 
 fn gunzip(path: &Path, raw: Vec<u8>, limit: u64) -> Result<Vec<u8>, MeshError> {
-    let _gunzip = Gunzip(web_time::Instant::now());
     if path.extension().is_some_and(|e| e == "gz") {
         use std::io::Read;
         let mut out = Vec::new();
@@ -1252,6 +1282,7 @@ fn gunzip_parse(
     normals: Normals,
     piece: usize,
     limit: u64,
+    stages: &crate::stages::Stages,
 ) -> Option<(Vec<u8>, ObjParse)> {
     use std::io::Read;
     use std::sync::Mutex;
@@ -1348,7 +1379,7 @@ fn gunzip_parse(
             }
         }
     });
-    crate::stages::record("gunzip", inflating);
+    stages.record("gunzip", inflating);
     if let Some(why) = junk {
         return Some((Vec::new(), Err(why)));
     }
@@ -1359,23 +1390,15 @@ fn gunzip_parse(
     pieces.sort_by_key(|(index, _)| *index);
     let pieces: Option<Vec<super::obj::Piece>> = pieces.into_iter().map(|(_, p)| p).collect();
     let parsed = super::obj::join_pieces(pieces?, normals);
-    crate::stages::record("OBJ parse", t0.elapsed().saturating_sub(inflating));
+    stages.record("OBJ parse", t0.elapsed().saturating_sub(inflating));
     Some((buf, parsed))
-}
-
-/// Records the gunzip stage when dropped (at every return of `gunzip`).
-struct Gunzip(web_time::Instant);
-
-impl Drop for Gunzip {
-    fn drop(&mut self) {
-        crate::stages::record("gunzip", self.0.elapsed());
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::{FaceError, MeshError, Normals, Transform, gunzip_parse};
     use crate::scene::{ObjError, ReadError, Scene, SceneError, obj};
+    use crate::stages::Stages;
     use std::path::Path;
 
     /// A scene of one mesh `m.obj` (scaled by `scale` in x), read through `read`.
@@ -1488,7 +1511,8 @@ mod tests {
             assert!(matches!(whole, Ok(Some(_))), "{}", shown(&whole));
             for piece in [1, 7, 100, 4096, 1 << 20] {
                 let (bytes, parsed) =
-                    gunzip_parse(&gzipped, normals, piece, 1 << 30).expect("streamed");
+                    gunzip_parse(&gzipped, normals, piece, 1 << 30, &Stages::new())
+                        .expect("streamed");
                 assert_eq!(bytes, text.as_bytes(), "piece {piece}");
                 assert_eq!(shown(&parsed), shown(&whole), "piece {piece}");
             }
@@ -1510,8 +1534,14 @@ mod tests {
             let whole = obj::parse(&text, Normals::Skip);
             assert!(!matches!(whole, Ok(Some(_))));
             for piece in [1, 100, 1 << 20] {
-                let (_, parsed) =
-                    gunzip_parse(&gz(text.as_bytes()), Normals::Skip, piece, 1 << 30).unwrap();
+                let (_, parsed) = gunzip_parse(
+                    &gz(text.as_bytes()),
+                    Normals::Skip,
+                    piece,
+                    1 << 30,
+                    &Stages::new(),
+                )
+                .unwrap();
                 assert_eq!(shown(&parsed), shown(&whole), "piece {piece}");
             }
         }
@@ -1528,7 +1558,7 @@ mod tests {
             let size = u32::from_le_bytes(lying[n - 4..].try_into().unwrap());
             lying[n - 4..].copy_from_slice(&size.wrapping_add(delta).to_le_bytes());
             assert!(
-                gunzip_parse(&lying, Normals::Skip, 100, 1 << 30).is_none(),
+                gunzip_parse(&lying, Normals::Skip, 100, 1 << 30, &Stages::new()).is_none(),
                 "{delta}"
             );
         }
@@ -1548,7 +1578,7 @@ mod tests {
             ("short", vec![0x1f, 0x8b]),
         ] {
             assert!(
-                gunzip_parse(&raw, Normals::Skip, 100, 1 << 30).is_none(),
+                gunzip_parse(&raw, Normals::Skip, 100, 1 << 30, &Stages::new()).is_none(),
                 "{what}"
             );
         }

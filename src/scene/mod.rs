@@ -1,6 +1,7 @@
 //! Scenes: the TOML format, its validation (every error names file, line and key), and
 //! OBJ meshes.
 
+pub mod camera_path;
 mod error;
 mod format;
 mod gltf;
@@ -16,6 +17,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::sync::Arc;
 
+pub use camera_path::{CameraKey, CameraPathError, MAX_FRAME};
 pub use error::{SceneError, line_of};
 use format::{SceneFile, Vec3File};
 pub use gltf::GltfError;
@@ -316,6 +318,13 @@ pub struct Scene {
     /// compare equal only when they hold the same cache, or none (a cache equals only
     /// itself: see [`crate::cache::Cache`]).
     pub cache: Option<Arc<crate::cache::Cache>>,
+    /// How long each stage of reading it took (read, parse, transform, textures; see
+    /// [`crate::stages`]); not part of what the scene is, so scenes compare equal whatever
+    /// their reading took.
+    pub load_stages: crate::stages::Timings,
+    /// The camera path (`[[camera.keys]]`, in increasing frames; empty: none): see
+    /// [`Scene::camera_at`].
+    pub camera_keys: Vec<CameraKey>,
 }
 
 /// How a scene is read: settings as values (the command line makes them from its flags and
@@ -454,14 +463,17 @@ impl Scene {
             inputs.borrow_mut().push(p.to_owned());
             read(p)
         };
+        let stages = crate::stages::Stages::new();
         let mut scene = Validator {
             src,
             path,
             read: &recording,
             limit: options.max_input_bytes,
             cache: options.cache.as_ref(),
+            stages: &stages,
         }
         .scene(file)?;
+        scene.load_stages = crate::stages::Timings(stages.into_times());
         let mut seen = std::collections::HashSet::new();
         scene.inputs = inputs
             .into_inner()
@@ -609,6 +621,8 @@ struct Validator<'a> {
     limit: u64,
     /// [`LoadOptions::cache`].
     cache: Option<&'a Arc<crate::cache::Cache>>,
+    /// Where the stages of reading are timed ([`Scene::load_stages`]).
+    stages: &'a crate::stages::Stages,
 }
 
 /// How a scene reads the files it names (meshes and their MTLs): the bytes, or why not.
@@ -801,6 +815,7 @@ impl Validator<'_> {
             None => TriangleAlgorithm::MollerTrumbore,
         };
         let camera = self.camera(&f.camera)?;
+        let camera_keys = self.camera_keys(f.camera.get_ref(), &camera)?;
 
         let mut lights = Vec::new();
         for (i, l) in f.lights.iter().enumerate() {
@@ -965,6 +980,8 @@ impl Validator<'_> {
             sphere_sources,
             triangle_sources,
             cache: self.cache.cloned(),
+            camera_keys,
+            load_stages: crate::stages::Timings::default(),
         })
     }
 
@@ -1085,6 +1102,75 @@ impl Validator<'_> {
         })
     }
 
+    /// `[[camera.keys]]`: each key's values, its own or the previous key's (the first's
+    /// `camera`'s), checked as `[camera]`'s are; frames in 0..=[`MAX_FRAME`], increasing.
+    fn camera_keys(
+        &self,
+        c: &format::CameraFile,
+        camera: &Camera,
+    ) -> Result<Vec<CameraKey>, SceneError> {
+        let mut keys: Vec<CameraKey> = Vec::new();
+        for (i, k) in c.keys.iter().flatten().enumerate() {
+            let span = k.span();
+            let k = k.get_ref();
+            let key = |name: &str| format!("camera.keys[{i}].{name}");
+            let frame = *k.frame.get_ref();
+            if !(0..=MAX_FRAME).contains(&frame) {
+                return self.err(
+                    k.frame.span(),
+                    &key("frame"),
+                    format!("{frame} is outside 0..={MAX_FRAME}"),
+                );
+            }
+            let prev = keys.last().copied().unwrap_or(CameraKey {
+                frame: 0,
+                eye: camera.eye,
+                look_at: camera.look_at,
+                up: camera.up,
+                fov: camera.fov,
+            });
+            if let Some(p) = keys.last()
+                && frame <= p.frame as i64
+            {
+                return self.err(
+                    k.frame.span(),
+                    &key("frame"),
+                    format!(
+                        "{frame} is not after the previous key's frame, {}: keys go in increasing frames",
+                        p.frame
+                    ),
+                );
+            }
+            let v3 = |v: &Option<format::Vec3File>, name: &str, old: [f32; 3]| match v {
+                Some(v) => self.finite3(v, &key(name)),
+                None => Ok(old),
+            };
+            let this = CameraKey {
+                frame: frame as u32,
+                eye: v3(&k.eye, "eye", prev.eye)?,
+                look_at: v3(&k.look_at, "look_at", prev.look_at)?,
+                up: v3(&k.up, "up", prev.up)?,
+                fov: match &k.fov {
+                    Some(f) => self.check(*f.get_ref(), f.span(), &key("fov"), validate::fov)?,
+                    None => prev.fov,
+                },
+            };
+            match validate::view(this.eye, this.look_at, this.up) {
+                Ok(()) => {}
+                Err(validate::ViewFault::LookAt(m)) => {
+                    let s = k.look_at.as_ref().map_or(span, |v| v.span());
+                    return self.err(s, &key("look_at"), m);
+                }
+                Err(validate::ViewFault::Up(m)) => {
+                    let s = k.up.as_ref().map_or(span, |v| v.span());
+                    return self.err(s, &key("up"), m);
+                }
+            }
+            keys.push(this);
+        }
+        Ok(keys)
+    }
+
     fn material(
         &self,
         name: &str,
@@ -1132,7 +1218,7 @@ impl Validator<'_> {
             let base = self.path.parent().unwrap_or(Path::new("."));
             let path = base.join(file.get_ref());
             textures
-                .add(&path, self.read)
+                .add(&path, self.read, self.stages)
                 .map(Some)
                 .or_else(|e| self.err(file.span(), &key(k), format!("{}: {e}", path.display())))
         };

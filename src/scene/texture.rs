@@ -188,21 +188,33 @@ pub struct TextureSet {
 
 impl TextureSet {
     /// The index of the texture at `path`, read with `read` and decoded on first use.
-    pub fn add(&mut self, path: &Path, read: &super::ReadFile<'_>) -> Result<u32, TextureError> {
+    /// Decoding is timed into `stages` as "texture decode".
+    pub fn add(
+        &mut self,
+        path: &Path,
+        read: &super::ReadFile<'_>,
+        stages: &crate::stages::Stages,
+    ) -> Result<u32, TextureError> {
         if let Some(&k) = self.by_path.get(path) {
             return Ok(k);
         }
         let bytes = read(path).map_err(TextureError::Read)?;
-        self.add_bytes(path, &bytes)
+        self.add_bytes(path, &bytes, stages)
     }
 
     /// The index of the texture encoded in `bytes`, known as `path` (a file, or an image
     /// inside a glTF: `file#imageK`), decoded on first use.
-    pub fn add_bytes(&mut self, path: &Path, bytes: &[u8]) -> Result<u32, TextureError> {
+    /// Decoding is timed into `stages` as "texture decode".
+    pub fn add_bytes(
+        &mut self,
+        path: &Path,
+        bytes: &[u8],
+        stages: &crate::stages::Stages,
+    ) -> Result<u32, TextureError> {
         if let Some(&k) = self.by_path.get(path) {
             return Ok(k);
         }
-        let t = crate::stages::time("texture decode", || decode(path, bytes))?;
+        let t = stages.time("texture decode", || decode(path, bytes))?;
         let k = self.textures.len() as u32;
         self.textures.push(t);
         self.by_path.insert(path.to_owned(), k);
