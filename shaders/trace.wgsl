@@ -98,7 +98,10 @@ fn box_interval(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_min: f32
     f = select(f, far.x, far.x < f);
     f = select(f, far.y, far.y < f);
     f = select(f, far.z, far.z < f);
-    f = f + abs(f) * BOX_SLACK;
+    // An exit at -∞ (below -INFINITY, the largest f32: a slab the ray runs parallel to,
+    // outside it) stays -∞: a miss.
+    // Widened it would be NaN, which the select below would pass over, keeping the box.
+    f = select(f + abs(f) * BOX_SLACK, f, f < -INFINITY);
     let t1 = select(t_max, f, f < t_max);
     return vec2<f32>(t0, t1);
 }

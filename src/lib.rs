@@ -32,6 +32,7 @@ pub mod render;
 pub mod scene;
 pub mod shared;
 pub mod stages;
+pub mod traversal_stats;
 
 pub use render::{
     Backend, RenderError, RenderOptions, Renderer, Tracer, TracerKind, UnknownBackend,

@@ -179,6 +179,34 @@ fn run(cli: Cli) -> Result<Verdict> {
             "glint view: this glint was built without the viewer; build it with \
              `--features view` (cargo install --path . --features view)"
         )),
+        Command::Stats {
+            scene,
+            size,
+            triangle,
+            json,
+            common,
+        } => {
+            let s = load(&scene, common.confine, None, &common.set)?;
+            let algo = triangle.unwrap_or(s.triangle);
+            let buf = glint::buffers::SceneBuffers::new(&s, size.0, size.1, algo);
+            let spec = glint::buffers::Specialisation::for_scene(&buf);
+            let stats = glint::traversal_stats::traversal_stats(&buf, spec);
+            if json {
+                println!("{}", stats.to_json());
+            } else {
+                println!(
+                    "{}: {}x{}, {} spheres, {} triangles, {} BVH nodes",
+                    scene.display(),
+                    size.0,
+                    size.1,
+                    buf.spheres.len(),
+                    buf.triangles.len(),
+                    buf.nodes.len()
+                );
+                print!("{stats}");
+            }
+            Ok(Verdict::Equal)
+        }
         Command::Bench {
             scenes,
             size,

@@ -36,6 +36,7 @@ fn frame_of_8192_squared_renders_in_tiles() {
         cam: Camera::from_params(&buf.params),
         buf: &buf,
         spec,
+        count: glint::cpu::count::NoCount,
     };
     let lavapipe = common::bit_exact_expected(gpu);
     let mut checked = 0;

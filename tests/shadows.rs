@@ -54,6 +54,7 @@ fn huge_floor_casts_no_shadow_on_itself() {
             cam: Camera::from_params(&buf.params),
             buf: &buf,
             spec,
+            count: glint::cpu::count::NoCount,
         };
         let light = V3::from_f32(buf.lights[0].position);
         let mut counts = [0usize; 4];
@@ -162,6 +163,7 @@ fn contact_shadow_has_no_lit_gap() {
         cam: Camera::from_params(&buf.params),
         buf: &buf,
         spec,
+        count: glint::cpu::count::NoCount,
     };
     let img = glint::cpu::render_f32(&buf, spec);
     let light = [4.0f64, 8.0, 2.0];
@@ -246,6 +248,7 @@ material = "m"
             cam: Camera::from_params(&b1.params),
             buf: &b1,
             spec: s1,
+            count: glint::cpu::count::NoCount,
         };
         let top: Vec<bool> = (0..120u32)
             .flat_map(|j| (0..160u32).map(move |i| (i, j)))

@@ -231,6 +231,7 @@ fn interpolated_normals_at_the_vertices_are_the_vertex_normals() {
         cam: Camera::from_params(&buf.params),
         buf: &buf,
         spec,
+        count: glint::cpu::count::NoCount,
     };
     let first = scene.smooth[0].first;
     let mut checked = 0;
@@ -532,6 +533,7 @@ fn hanikas_point_removes_most_of_the_shadow_terminator() {
             cam: Camera::from_params(&buf.params),
             buf: &buf,
             spec,
+            count: glint::cpu::count::NoCount,
         };
         let light: glint::cpu::real::V3<f32> = buf.lights[0].position.into();
         let (mut plain, mut hanika, mut lit) = (0, 0, 0);

@@ -246,6 +246,24 @@ pub enum Command {
         #[arg(long, default_value = "bits")]
         tolerance: glint::compare::Tolerance,
     },
+    /// Traversal statistics of a frame, counted on the CPU mirror of the shader's per-ray
+    /// traversal: per ray kind, the nodes, leaves and primitives each ray visits, its
+    /// deepest stack, the bytes it reads, and the spread within a warp's 8x4 pixels.
+    Stats {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Image size WxH (default 1024x768).
+        #[arg(long, value_parser = parse_size, default_value = "1024x768")]
+        size: (u32, u32),
+        /// Triangle algorithm (default: the scene's).
+        #[arg(long)]
+        triangle: Option<TriangleAlgorithm>,
+        /// Print one JSON object keyed by ray kind instead of the table.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        common: CommonArgs,
+    },
     /// Speed against error: every scene × tracer × triangle algorithm, with a warm-up and
     /// timed runs; writes report.md, report.json and plot.png to --out.
     Bench {

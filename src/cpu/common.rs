@@ -58,14 +58,17 @@ impl Camera<f32> {
     }
 }
 
-/// What the shader sees at module scope, for the CPU.
-pub struct Globals<'a, R> {
+/// What the shader sees at module scope, for the CPU; and what counts the traversal's
+/// steps ([`super::count`]: nothing, for the tracers).
+pub struct Globals<'a, R, C = super::count::NoCount> {
     /// The camera.
     pub cam: Camera<R>,
     /// Scene buffers (colours and geometry are widened from f32 to `R` where read).
     pub buf: &'a SceneBuffers,
     /// The pipeline's override constants.
     pub spec: Specialisation,
+    /// The traversal's counter.
+    pub count: C,
 }
 
 /// WGSL `Ray`.

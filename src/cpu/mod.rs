@@ -2,6 +2,7 @@
 //! one generic `trace.rs`, rows in parallel with rayon.
 
 pub mod common;
+pub mod count;
 pub mod exact;
 pub mod packet;
 pub mod prims;
@@ -18,6 +19,7 @@ use rayon::prelude::*;
 use crate::buffers::{HitOut, RayIn, SceneBuffers, Specialisation};
 use crate::image::Image;
 use crate::scene::Scene;
+use count::NoCount;
 use real::{Real, V3};
 use trace::{Camera, Globals};
 
@@ -65,6 +67,7 @@ fn globals_f32(buf: &SceneBuffers, spec: Specialisation) -> Globals<'_, f32> {
         cam: Camera::from_params(&buf.params),
         buf,
         spec,
+        count: NoCount,
     }
 }
 
@@ -318,7 +321,12 @@ fn globals_f64<'a>(scene: &Scene, buf: &'a SceneBuffers, spec: Specialisation) -
         height: h,
         samples: buf.params.samples,
     };
-    Globals { cam, buf, spec }
+    Globals {
+        cam,
+        buf,
+        spec,
+        count: NoCount,
+    }
 }
 
 /// The `query` entry point on the CPU, in f32 (the shader's twin) over many rays.

@@ -11,6 +11,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::common::{Globals, Hit, Ray, in_interval, max0, sign_nonneg};
+use super::count::Count;
 use super::exact::product_error;
 use crate::buffers::{
     FLAT, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE, TRIANGLE_WATERTIGHT,
@@ -266,7 +267,7 @@ pub fn hit_triangle_watertight<R: Real>(
 
 /// WGSL `ray_shear`: the ray's shear when the watertight test is in use, else an identity.
 #[inline]
-pub fn ray_shear<R: Real>(g: &Globals<R>, dir: V3<R>) -> Shear<R> {
+pub fn ray_shear<R: Real, C: Count>(g: &Globals<R, C>, dir: V3<R>) -> Shear<R> {
     if g.spec.triangle_algo == TRIANGLE_WATERTIGHT {
         return make_shear(dir);
     }
@@ -282,8 +283,8 @@ pub fn ray_shear<R: Real>(g: &Globals<R>, dir: V3<R>) -> Shear<R> {
 
 /// WGSL `hit_triangle`: the scene's triangle algorithm.
 #[inline]
-pub fn hit_triangle<R: Real>(
-    g: &Globals<R>,
+pub fn hit_triangle<R: Real, C: Count>(
+    g: &Globals<R, C>,
     ray: Ray<R>,
     sh: Shear<R>,
     tri: &Triangle,
@@ -301,8 +302,8 @@ pub fn hit_triangle<R: Real>(
 
 /// WGSL `hit_prim`: primitive `id`, (t, u, v) with t = INFINITY on a miss.
 #[inline]
-pub fn hit_prim<R: Real>(
-    g: &Globals<R>,
+pub fn hit_prim<R: Real, C: Count>(
+    g: &Globals<R, C>,
     ray: Ray<R>,
     sh: Shear<R>,
     id: u32,
@@ -325,7 +326,7 @@ pub fn hit_prim<R: Real>(
 
 /// WGSL `is_triangle`: whether primitive `id` (a hit's, never PRIM_NONE) is a triangle; a
 /// constant where the scene has one kind only (the shader then compiles one branch).
-pub fn is_triangle<R: Real>(g: &Globals<R>, id: u32) -> bool {
+pub fn is_triangle<R: Real, C: Count>(g: &Globals<R, C>, id: u32) -> bool {
     if !g.spec.has_spheres {
         return true;
     }
@@ -336,7 +337,7 @@ pub fn is_triangle<R: Real>(g: &Globals<R>, id: u32) -> bool {
 }
 
 /// WGSL `prim_normal`: the unit geometric normal at `p` (not yet facing the ray).
-pub fn prim_normal<R: Real>(g: &Globals<R>, hit: &Hit<R>, p: V3<R>) -> V3<R> {
+pub fn prim_normal<R: Real, C: Count>(g: &Globals<R, C>, hit: &Hit<R>, p: V3<R>) -> V3<R> {
     if is_triangle(g, hit.prim) {
         let tri = &g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize];
         let (ta, tb, tc) = tri_vertices::<R>(tri);
@@ -347,7 +348,7 @@ pub fn prim_normal<R: Real>(g: &Globals<R>, hit: &Hit<R>, p: V3<R>) -> V3<R> {
 }
 
 /// WGSL `prim_material`: the material index of the hit primitive.
-pub fn prim_material<R: Real>(g: &Globals<R>, hit: &Hit<R>) -> u32 {
+pub fn prim_material<R: Real, C: Count>(g: &Globals<R, C>, hit: &Hit<R>) -> u32 {
     if is_triangle(g, hit.prim) {
         return g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize].material;
     }
@@ -365,7 +366,12 @@ pub struct Shading<R> {
 
 /// WGSL `shading_at`: `n` and `p` themselves, unless the hit triangle is smooth; then the
 /// interpolated vertex normal and Hanika's lifted point (see the WGSL doc comment).
-pub fn shading_at<R: Real>(g: &Globals<R>, hit: &Hit<R>, p: V3<R>, n: V3<R>) -> Shading<R> {
+pub fn shading_at<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    hit: &Hit<R>,
+    p: V3<R>,
+    n: V3<R>,
+) -> Shading<R> {
     if !g.spec.smooth || (hit.prim & TRIANGLE_BIT) == 0 {
         return Shading { n, p };
     }

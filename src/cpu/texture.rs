@@ -7,6 +7,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::common::{Globals, Hit, flush3};
+use super::count::Count;
 use super::prims::is_triangle;
 use crate::buffers::{Material, NO_TEXTURE, NO_UVS, TRIANGLE_BIT, Texture};
 use crate::shared::real::{Real, V3};
@@ -33,7 +34,7 @@ pub fn wrap01<R: Real>(u: R) -> R {
 
 /// WGSL `texel`: texel (x, y) of `tex` (row y from the bottom), wrapped into the image.
 #[inline]
-pub fn texel<R: Real>(g: &Globals<R>, tex: &Texture, x: i32, y: i32) -> V3<R> {
+pub fn texel<R: Real, C: Count>(g: &Globals<R, C>, tex: &Texture, x: i32, y: i32) -> V3<R> {
     let w = tex.width as i32;
     let h = tex.height as i32;
     let xw = if x < 0 {
@@ -61,7 +62,7 @@ pub fn texel<R: Real>(g: &Globals<R>, tex: &Texture, x: i32, y: i32) -> V3<R> {
 
 /// WGSL `texture_place`: texture `id`'s place, the four words at 4 × `id` in `texels`.
 #[inline]
-pub fn texture_place<R: Real>(g: &Globals<R>, id: u32) -> Texture {
+pub fn texture_place<R: Real, C: Count>(g: &Globals<R, C>, id: u32) -> Texture {
     let k = 4 * id as usize;
     let t = &g.buf.texels;
     Texture {
@@ -74,7 +75,7 @@ pub fn texture_place<R: Real>(g: &Globals<R>, id: u32) -> Texture {
 
 /// WGSL `texture_colour`: texture `id` at `uv` (v up), bilinear between the four texel
 /// centres around it, wrapping around the edges.
-pub fn texture_colour<R: Real>(g: &Globals<R>, id: u32, uv: [R; 2]) -> V3<R> {
+pub fn texture_colour<R: Real, C: Count>(g: &Globals<R, C>, id: u32, uv: [R; 2]) -> V3<R> {
     let tex = &texture_place(g, id);
     let half = R::ONE / (R::ONE + R::ONE);
     let x = wrap01(uv[0]) * R::from_u32(tex.width) - half;
@@ -95,7 +96,7 @@ pub fn texture_colour<R: Real>(g: &Globals<R>, id: u32, uv: [R; 2]) -> V3<R> {
 /// WGSL `albedo`: kd times the colour of the hit triangle's `map_kd` at its (u, v), ka
 /// times its `map_ka`'s (each product flushed as `shade`'s terms are); `m`'s own for
 /// spheres and untextured triangles.
-pub fn albedo<R: Real>(g: &Globals<R>, hit: &Hit<R>, m: &Material) -> Albedo<R> {
+pub fn albedo<R: Real, C: Count>(g: &Globals<R, C>, hit: &Hit<R>, m: &Material) -> Albedo<R> {
     let mut out = Albedo {
         ka: V3::from_f32(m.ka),
         kd: V3::from_f32(m.kd),

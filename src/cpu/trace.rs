@@ -8,6 +8,7 @@
 
 pub use super::common::{BVH_STACK, Camera, Globals, Hit, Ray};
 use super::common::{clamp01, flush, flush3, max0, max2};
+use super::count::{Count, RayKind};
 use super::prims::{
     hit_prim, hit_sphere, hit_triangle, prim_material, prim_normal, ray_shear, shading_at,
 };
@@ -21,7 +22,7 @@ use crate::shared::real::{Real, V3};
 
 /// WGSL `camera_ray`: the primary ray through the point (dx, dy) of pixel (i, j), each in
 /// [0, 1) from its top-left corner (the centre is (0.5, 0.5)).
-pub fn camera_ray<R: Real>(g: &Globals<R>, i: u32, j: u32, dx: R, dy: R) -> Ray<R> {
+pub fn camera_ray<R: Real, C: Count>(g: &Globals<R, C>, i: u32, j: u32, dx: R, dy: R) -> Ray<R> {
     let c = &g.cam;
     let two = R::ONE + R::ONE;
     let x = ((R::from_u32(i) + dx) / R::from_u32(c.width) * two - R::ONE) * c.tan_half * c.aspect;
@@ -38,9 +39,15 @@ pub fn camera_ray<R: Real>(g: &Globals<R>, i: u32, j: u32, dx: R, dy: R) -> Ray<
 
 /// WGSL `closest_sphere`: `best`, or the nearest sphere hit in (t_min, best.t); the first
 /// sphere wins ties.
-pub fn closest_sphere<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, best: Hit<R>) -> Hit<R> {
+pub fn closest_sphere<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    ray: Ray<R>,
+    t_min: R,
+    best: Hit<R>,
+) -> Hit<R> {
     let mut b = best;
     for k in 0..g.buf.params.n_spheres {
+        g.count.prim(k);
         let t = hit_sphere(ray, &g.buf.spheres[k as usize], t_min, b.t);
         if t < b.t {
             b = Hit {
@@ -56,8 +63,15 @@ pub fn closest_sphere<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, best: Hit<
 
 /// WGSL `sphere_blocks`: whether a sphere other than `skip` lies on the ray in (t_min,
 /// t_max); stops at the first hit.
-pub fn sphere_blocks<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+pub fn sphere_blocks<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    ray: Ray<R>,
+    t_min: R,
+    t_max: R,
+    skip: u32,
+) -> bool {
     for k in 0..g.buf.params.n_spheres {
+        g.count.prim(k);
         if k != skip && hit_sphere(ray, &g.buf.spheres[k as usize], t_min, t_max) < t_max {
             return true;
         }
@@ -67,7 +81,12 @@ pub fn sphere_blocks<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, s
 
 /// WGSL `closest_hit_all`: the nearest hit in (t_min, t_max), spheres first; the first
 /// primitive wins ties.
-pub fn closest_hit_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
+pub fn closest_hit_all<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    ray: Ray<R>,
+    t_min: R,
+    t_max: R,
+) -> Hit<R> {
     let mut best = Hit {
         t: t_max,
         prim: PRIM_NONE,
@@ -80,6 +99,7 @@ pub fn closest_hit_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
     if g.spec.has_triangles {
         let sh = ray_shear(g, ray.dir);
         for k in 0..g.buf.params.n_triangles {
+            g.count.prim(k | TRIANGLE_BIT);
             let h = hit_triangle(g, ray, sh, &g.buf.triangles[k as usize], t_min, best.t);
             if h.0 < best.t {
                 best = Hit {
@@ -95,13 +115,20 @@ pub fn closest_hit_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
 }
 
 /// WGSL `occluded_all`: whether anything but `skip` lies on the ray, testing every primitive.
-pub fn occluded_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+pub fn occluded_all<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    ray: Ray<R>,
+    t_min: R,
+    t_max: R,
+    skip: u32,
+) -> bool {
     if g.spec.has_spheres && sphere_blocks(g, ray, t_min, t_max, skip) {
         return true;
     }
     if g.spec.has_triangles {
         let sh = ray_shear(g, ray.dir);
         for k in 0..g.buf.params.n_triangles {
+            g.count.prim(k | TRIANGLE_BIT);
             if (k | TRIANGLE_BIT) != skip
                 && hit_triangle(g, ray, sh, &g.buf.triangles[k as usize], t_min, t_max).0 < t_max
             {
@@ -118,9 +145,11 @@ pub fn occluded_all<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, sk
 /// conservative slab test; hit when t0 <= t1. The far end is the nearest exit distance
 /// (NaN slabs passed over) widened by `BOX_SLACK` of itself: x + |x|·`BOX_SLACK` never
 /// decreases as x grows (`slack_is_monotone`), so this is each exit widened, then the
-/// nearest taken, in one widening instead of three. Where an exit is -∞ (the widening
-/// of which is NaN, a slab that used to constrain nothing) the box is kept, which only
-/// visits more.
+/// nearest taken, in one widening instead of three. An exit at -∞ (a zero direction
+/// component, the box wholly on one side of the ray's plane) is kept as -∞, so the box is
+/// missed: widened, it was NaN and kept the box, and one shadow ray of the 1M-triangle
+/// heightfield, parallel to z = 5 on it, visited 213,264 nodes instead of about 20
+/// (`docs/bench/traversal.md`).
 pub fn box_interval<R: Real>(
     node: &BvhNode,
     origin: V3<R>,
@@ -149,7 +178,10 @@ pub fn box_interval<R: Real>(
     f = select(f, far.x, far.x < f);
     f = select(f, far.y, far.y < f);
     f = select(f, far.z, far.z < f);
-    f = f + f.abs() * R::BOX_SLACK;
+    // An exit at -∞ (below -INFINITY, the largest f32: a slab the ray runs parallel to,
+    // outside it) stays -∞: a miss.
+    // Widened it would be NaN, which the select below would pass over, keeping the box.
+    f = select(f + f.abs() * R::BOX_SLACK, f, f < -R::INFINITY);
     let t1 = select(t_max, f, f < t_max);
     (t0, t1)
 }
@@ -174,7 +206,12 @@ pub fn nearer<R: Real>(t: R, id: u32, best: &Hit<R>) -> bool {
 
 /// WGSL `closest_hit_bvh`: depth first, both children's boxes tested, the nearer entered
 /// first; fixed stack, one step per node.
-pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
+pub fn closest_hit_bvh<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    ray: Ray<R>,
+    t_min: R,
+    t_max: R,
+) -> Hit<R> {
     let mut best = Hit {
         t: t_max,
         prim: PRIM_NONE,
@@ -188,6 +225,7 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
         return best;
     }
     let root = box_interval(&nodes[0], ray.origin, inv_dir, t_min, t_max);
+    g.count.nodes_read(1);
     if !(root.0 <= root.1) {
         return best;
     }
@@ -196,8 +234,11 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
     let mut at = 0u32;
     for _step in 0..g.buf.params.n_nodes {
         let node = &nodes[at as usize];
+        g.count.nodes_read(1);
         let count = node.count_axis >> 2;
         if count == 0 {
+            g.count.interior();
+            g.count.nodes_read(2);
             let bound = tie_bound(&best);
             let left = box_interval(&nodes[at as usize + 1], ray.origin, inv_dir, t_min, bound);
             let right = box_interval(
@@ -218,6 +259,7 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
                     at += 1;
                 }
                 sp += 1;
+                g.count.stack(sp);
                 continue;
             }
             if hit_left {
@@ -229,8 +271,10 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
                 continue;
             }
         } else {
+            g.count.leaf();
             for k in node.first..node.first + count {
                 let id = g.buf.prim_ids[k as usize];
+                g.count.prim(id);
                 let h = hit_prim(g, ray, sh, id, t_min, tie_bound(&best));
                 if nearer(h.0, id, &best) {
                     best = Hit {
@@ -253,7 +297,13 @@ pub fn closest_hit_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R)
 
 /// WGSL `occluded_bvh`: `occluded` through the BVH; stops at the first hit. Repeats
 /// `closest_hit_bvh`'s loop as the shader does (see there why).
-pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+pub fn occluded_bvh<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    ray: Ray<R>,
+    t_min: R,
+    t_max: R,
+    skip: u32,
+) -> bool {
     let sh = ray_shear(g, ray.dir);
     let inv_dir = V3::splat(R::ONE) / ray.dir;
     let nodes = &g.buf.nodes;
@@ -261,6 +311,7 @@ pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, sk
         return false;
     }
     let root = box_interval(&nodes[0], ray.origin, inv_dir, t_min, t_max);
+    g.count.nodes_read(1);
     if !(root.0 <= root.1) {
         return false;
     }
@@ -269,8 +320,11 @@ pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, sk
     let mut at = 0u32;
     for _step in 0..g.buf.params.n_nodes {
         let node = &nodes[at as usize];
+        g.count.nodes_read(1);
         let count = node.count_axis >> 2;
         if count == 0 {
+            g.count.interior();
+            g.count.nodes_read(2);
             let left = box_interval(&nodes[at as usize + 1], ray.origin, inv_dir, t_min, t_max);
             let right = box_interval(
                 &nodes[node.first as usize],
@@ -290,6 +344,7 @@ pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, sk
                     at += 1;
                 }
                 sp += 1;
+                g.count.stack(sp);
                 continue;
             }
             if hit_left {
@@ -301,8 +356,10 @@ pub fn occluded_bvh<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, sk
                 continue;
             }
         } else {
+            g.count.leaf();
             for k in node.first..node.first + count {
                 let id = g.buf.prim_ids[k as usize];
+                g.count.prim(id);
                 if id != skip && hit_prim(g, ray, sh, id, t_min, t_max).0 < t_max {
                     return true;
                 }
@@ -323,23 +380,42 @@ pub fn finite_bound<R: Real>(t_max: R) -> R {
 }
 
 /// WGSL `closest_hit`: the nearest hit in (t_min, t_max); of equal t, the lowest id.
-pub fn closest_hit<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R) -> Hit<R> {
+pub fn closest_hit<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    ray: Ray<R>,
+    t_min: R,
+    t_max: R,
+) -> Hit<R> {
     let t_hi = finite_bound(t_max);
-    if g.spec.use_bvh {
-        return closest_hit_bvh(g, ray, t_min, t_hi);
-    }
-    closest_hit_all(g, ray, t_min, t_hi)
+    g.count.begin(false);
+    let hit = if g.spec.use_bvh {
+        closest_hit_bvh(g, ray, t_min, t_hi)
+    } else {
+        closest_hit_all(g, ray, t_min, t_hi)
+    };
+    g.count.end();
+    hit
 }
 
 /// WGSL `occluded`: whether anything but primitive `skip` lies on the ray in (t_min,
 /// t_max). A convex primitive cannot shadow a point of its own where N·L > 0, so skipping
 /// the one that was hit loses no shadow.
-pub fn occluded<R: Real>(g: &Globals<R>, ray: Ray<R>, t_min: R, t_max: R, skip: u32) -> bool {
+pub fn occluded<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    ray: Ray<R>,
+    t_min: R,
+    t_max: R,
+    skip: u32,
+) -> bool {
     let t_hi = finite_bound(t_max);
-    if g.spec.use_bvh {
-        return occluded_bvh(g, ray, t_min, t_hi, skip);
-    }
-    occluded_all(g, ray, t_min, t_hi, skip)
+    g.count.begin(true);
+    let blocked = if g.spec.use_bvh {
+        occluded_bvh(g, ray, t_min, t_hi, skip)
+    } else {
+        occluded_all(g, ray, t_min, t_hi, skip)
+    };
+    g.count.end();
+    blocked
 }
 
 // ---- shading -----------------------------------------------------------------------------
@@ -396,7 +472,7 @@ pub fn spot_factor<R: Real>(light: &Light, c: R) -> R {
 }
 
 /// WGSL `shade`: the Phong model (docs/scene-format.md) at a hit, each term only where the model has it.
-pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
+pub fn shade<R: Real, C: Count>(g: &Globals<R, C>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
     let m: &Material = &g.buf.materials[prim_material(g, hit) as usize];
     let a = super::texture::albedo(g, hit, m);
     let p = ray.origin + ray.dir * hit.t;
@@ -458,8 +534,9 @@ pub fn shade<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>) -> V3<R> {
 
 /// WGSL `trace_sample`: the colour through the point (dx, dy) of pixel (i, j) and, in w,
 /// the hit distance (−1 on a miss).
-pub fn trace_sample<R: Real>(g: &Globals<R>, i: u32, j: u32, dx: R, dy: R) -> [R; 4] {
+pub fn trace_sample<R: Real, C: Count>(g: &Globals<R, C>, i: u32, j: u32, dx: R, dy: R) -> [R; 4] {
     let ray = camera_ray(g, i, j, dx, dy);
+    g.count.next_kind(RayKind::Camera);
     let hit = closest_hit(g, ray, R::ZERO, R::INFINITY);
     if hit.prim == PRIM_NONE {
         let bg = V3::<R>::from_f32(g.buf.params.background);
@@ -482,7 +559,7 @@ pub fn sample_offset<R: Real>(s: u32, n: u32) -> R {
 /// WGSL `trace_pixel`: the colour of pixel (i, j) and, in w, the hit distance (−1 on a
 /// miss); with antialiasing the N×N samples, rows top to bottom, summed in that order and
 /// divided by N², w the nearest hit's t.
-pub fn trace_pixel<R: Real>(g: &Globals<R>, i: u32, j: u32) -> [R; 4] {
+pub fn trace_pixel<R: Real, C: Count>(g: &Globals<R, C>, i: u32, j: u32) -> [R; 4] {
     let half = R::ONE / (R::ONE + R::ONE);
     if !g.spec.antialias {
         return trace_sample(g, i, j, half, half);
@@ -508,7 +585,7 @@ pub fn trace_pixel<R: Real>(g: &Globals<R>, i: u32, j: u32) -> [R; 4] {
 // ---- entry points ------------------------------------------------------------------------
 
 /// WGSL `query` for one ray.
-pub fn query<R: Real>(g: &Globals<R>, r: &RayIn) -> HitOut {
+pub fn query<R: Real, C: Count>(g: &Globals<R, C>, r: &RayIn) -> HitOut {
     let ray = Ray {
         origin: V3::from_f32(r.origin),
         dir: V3::from_f32(r.dir),
@@ -525,6 +602,37 @@ pub fn query<R: Real>(g: &Globals<R>, r: &RayIn) -> HitOut {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A ray with a zero direction component misses every box wholly on one side of its
+    /// plane (an exit at -∞ stays -∞) and still hits a box across it, in f32 and f64. The
+    /// heightfield's shadow ray that visited 213,264 nodes was such a ray (z = 5 exactly).
+    #[test]
+    fn a_parallel_ray_misses_boxes_beside_its_plane() {
+        let node = |lo: [f32; 3], hi: [f32; 3]| BvhNode {
+            lo,
+            hi,
+            ..BvhNode::default()
+        };
+        let o = V3::new(9.25f32, -0.09, 5.0);
+        let d = V3::new(-4.25f32, 15.09, 0.0);
+        let inv = V3::splat(1.0f32) / d;
+        assert!(inv.z.is_infinite());
+        let below = node([4.96, -0.04, -20.0], [5.03, -0.02, -19.95]);
+        let above = node([4.96, -0.04, 19.0], [5.03, -0.02, 19.05]);
+        let across = node([9.2, -0.1, 4.9], [9.3, 0.0, 5.1]);
+        let hit = |n: &BvhNode| {
+            let (t0, t1) = box_interval(n, o, inv, 0.0, 1.0);
+            let o64 = V3::new(o.x as f64, o.y as f64, o.z as f64);
+            let inv64 = V3::splat(1.0f64) / V3::new(d.x as f64, d.y as f64, d.z as f64);
+            let (u0, u1) = box_interval(n, o64, inv64, 0.0, 1.0);
+            assert_eq!(t0 <= t1, u0 <= u1, "f32 and f64 agree on {n:?}");
+            t0 <= t1
+        };
+        assert!(!hit(&below), "a box wholly below z = 5");
+        assert!(!hit(&above), "a box wholly above z = 5");
+        // The twin: the box the ray starts in is hit.
+        assert!(hit(&across));
+    }
 
     /// The widening `box_interval` gives the nearest exit.
     fn widen(x: f32) -> f32 {

@@ -6,6 +6,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::common::{Globals, Hit, Ray, clamp01, flush, flush3, max0, max2};
+use super::count::{Count, RayKind};
 use super::prims::{prim_material, prim_normal, shading_at};
 use super::trace::{closest_hit, shade};
 use crate::buffers::{Material, PRIM_NONE};
@@ -57,7 +58,7 @@ pub fn spawn_origin<R: Real>(o: V3<R>, p: V3<R>, n: V3<R>) -> V3<R> {
 
 /// WGSL `worth_tracing`: the weight's largest channel is positive and reaches
 /// `min_weight`.
-pub fn worth_tracing<R: Real>(g: &Globals<R>, w: V3<R>) -> bool {
+pub fn worth_tracing<R: Real, C: Count>(g: &Globals<R, C>, w: V3<R>) -> bool {
     let m = max2(max2(w.x, w.y), w.z);
     m > R::ZERO && m >= R::from_f32(g.buf.params.min_weight)
 }
@@ -75,8 +76,8 @@ pub fn keep_side<R: Real>(dir: V3<R>, n: V3<R>, side: R) -> V3<R> {
 /// WGSL `push_children`: pushes the transmitted ray, then the reflected one, of the hit
 /// `hit` of `ray` (weight `weight`, made by `depth` bounces) onto `stack` above `sp`;
 /// returns the new top.
-pub fn push_children<R: Real>(
-    g: &Globals<R>,
+pub fn push_children<R: Real, C: Count>(
+    g: &Globals<R, C>,
     stack: &mut [Pending<R>; WHITTED_STACK],
     sp: usize,
     ray: Ray<R>,
@@ -128,6 +129,7 @@ pub fn push_children<R: Real>(
             dir: t,
             weight: w_t,
         };
+        g.count.pushed(RayKind::Refracted);
         top += 1;
     }
     let w_r = flush3(weight * wr);
@@ -139,6 +141,7 @@ pub fn push_children<R: Real>(
             dir: r,
             weight: w_r,
         };
+        g.count.pushed(RayKind::Reflected);
         top += 1;
     }
     top
@@ -147,7 +150,12 @@ pub fn push_children<R: Real>(
 /// WGSL `secondary`: the colour at the first hit `hit` of `ray` whose local shading is
 /// `local`, with every reflection and refraction below it, summed in the shader's order
 /// and clamped to [0, 1].
-pub fn secondary<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>, local: V3<R>) -> V3<R> {
+pub fn secondary<R: Real, C: Count>(
+    g: &Globals<R, C>,
+    ray: Ray<R>,
+    hit: &Hit<R>,
+    local: V3<R>,
+) -> V3<R> {
     let zero = Pending {
         origin: V3::splat(R::ZERO),
         depth: 0,
@@ -166,8 +174,8 @@ pub fn secondary<R: Real>(g: &Globals<R>, ray: Ray<R>, hit: &Hit<R>, local: V3<R
 /// The loop of WGSL `secondary`: pops the rays on `stack` below `sp` until none is left,
 /// adding each one's weighted colour to `color` and pushing its own rays; the sum, not yet
 /// clamped. (Apart so that the packet tracer can finish a lane's walk here.)
-pub fn walk<R: Real>(
-    g: &Globals<R>,
+pub fn walk<R: Real, C: Count>(
+    g: &Globals<R, C>,
     stack: &mut [Pending<R>; WHITTED_STACK],
     mut sp: usize,
     mut color: V3<R>,
@@ -180,6 +188,7 @@ pub fn walk<R: Real>(
             origin: next.origin,
             dir: next.dir,
         };
+        g.count.popped();
         let h = closest_hit(g, r, R::ZERO, R::INFINITY);
         if h.prim == PRIM_NONE {
             color = color + flush3(next.weight * background);

@@ -613,6 +613,7 @@ pub fn pixel_dirs(scene: &Scene, pixels: &[(u32, u32)]) -> Vec<[f32; 3]> {
         cam: glint::cpu::trace::Camera::from_params(&buf.params),
         buf: &buf,
         spec: Specialisation::for_scene(&buf),
+        count: glint::cpu::count::NoCount,
     };
     pixels
         .iter()

@@ -101,7 +101,12 @@ fn clip_interval(near: [f32; 3], far: [f32; 3], t_min: f32, bound: f32) -> (f32,
     f = if far[0] < f { far[0] } else { f };
     f = if far[1] < f { far[1] } else { f };
     f = if far[2] < f { far[2] } else { f };
-    let f = f + f.abs() * BOX_SLACK;
+    // An exit at -∞ stays -∞, a miss (see `box_interval`).
+    let f = if f < -INFINITY {
+        f
+    } else {
+        f + f.abs() * BOX_SLACK
+    };
     let t1 = if f < bound { f } else { bound };
     (t0, t1)
 }
