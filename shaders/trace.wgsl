@@ -98,10 +98,11 @@ fn box_interval(node: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, t_min: f32
     f = select(f, far.x, far.x < f);
     f = select(f, far.y, far.y < f);
     f = select(f, far.z, far.z < f);
-    // An exit at -∞ (below -INFINITY, the largest f32: a slab the ray runs parallel to,
-    // outside it) stays -∞: a miss.
-    // Widened it would be NaN, which the select below would pass over, keeping the box.
-    f = select(f + abs(f) * BOX_SLACK, f, f < -INFINITY);
+    // An exit at -∞ (a slab the ray runs parallel to, outside it) is raised to -INFINITY,
+    // the largest finite f32 below 0, which widens to a negative number: a miss. Widened
+    // itself it would be NaN, which the select below would pass over, keeping the box.
+    f = max2(f, -INFINITY);
+    f = f + abs(f) * BOX_SLACK;
     let t1 = select(t_max, f, f < t_max);
     return vec2<f32>(t0, t1);
 }

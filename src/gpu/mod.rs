@@ -162,12 +162,10 @@ pub fn rounds_correctly(info: &wgpu::AdapterInfo) -> bool {
             || info.name.to_lowercase().contains("llvmpipe"))
 }
 
-/// Whether shadow rays should go in packets on this adapter (measured 2026-12-02,
-/// `docs/bench/ab.md`): yes, except on lavapipe before Mesa 24.3, which runs both sides of every
-/// branch, even where no lane takes one (24.3 skips an inactive branch): there the packet
-/// shadow traversal measured 1.19–1.24× slower on the seed's bb8 with shadows and level on
-/// the peers' scenes, against 0.82–0.93 on Mesa 25. A driver whose version cannot be read
-/// gets packets.
+/// Whether shadow rays should go in packets on this adapter: yes, except on lavapipe
+/// before Mesa 24.3, which runs both sides of every branch, even where no lane takes one
+/// (24.3 skips an inactive branch), so packets of shadow rays are slower there
+/// (`docs/bench/ab.md`). A driver whose version cannot be read gets packets.
 pub fn packet_shadows_pay(info: &wgpu::AdapterInfo) -> bool {
     if info.device_type != wgpu::DeviceType::Cpu {
         return true;
@@ -179,13 +177,9 @@ pub fn packet_shadows_pay(info: &wgpu::AdapterInfo) -> bool {
 }
 
 /// Whether the packet traversal (one packet per subgroup) pays on this adapter: on CPU
-/// Vulkan implementations, where it was measured against the per-ray traversal
-/// (`docs/bench/ab.md`: lavapipe 25, peers 1M 0.70 with shadows), yes; on GPUs, no. On an
-/// NVIDIA H200 (driver 580.159.04, 2026-12-04, `glint bench`, 1024×768, median of 5) the
-/// per-ray traversal was faster or level on every scene measured: whitted 2.1 ms against
-/// 8.2, peers 1M with shadows 225 against 322, peers 100k with shadows 24.7 against 32.8,
-/// the dragon 4.5 against 5.2, bb8 with shadows 1.6 against 1.9, peers 1M without shadows
-/// 2.4 against 2.5 (`docs/bench/gpu-h200.md`).
+/// Vulkan implementations yes (`docs/bench/ab.md`); on GPUs no, where the one measured
+/// (an NVIDIA H200) ran the per-ray traversal faster or level on every scene
+/// (`docs/bench/gpu-h200.md`).
 pub fn packet_traversal_pays(info: &wgpu::AdapterInfo) -> bool {
     info.device_type == wgpu::DeviceType::Cpu
 }

@@ -143,9 +143,8 @@ impl<O> Lanes<O> {
 /// in every build): the sixteen flags as bytes (0 or 1) in one register, shifted so each
 /// byte's flag is its sign bit, and `pmovmskb` gathers the sixteen sign bits. Elsewhere,
 /// branch-free, eight lanes at a time: the flags as bytes times 0x0102040810204080 puts
-/// byte l's bit in bit 56 + l, and no two partial products share a bit, so nothing carries.
-/// (The multiply was the x86 path too until 2026-12-03: per 1M-triangle frame, 4–5 % of
-/// the samples, mostly the watertight test's flags for its exact fallback.)
+/// byte l's bit in bit 56 + l, and no two partial products share a bit, so nothing carries
+/// (slower on x86: `docs/bench/cpu-packets.md`).
 #[inline(always)]
 pub(super) fn mask_of(flags: &[bool; LANES]) -> Mask {
     #[cfg(target_arch = "x86_64")]

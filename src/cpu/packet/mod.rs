@@ -5,11 +5,7 @@
 //! vectorise, and `trace_packet` is compiled twice more: for AVX2 (a lane loop is two
 //! eight-wide vectors) and AVX-512 (one sixteen-wide vector).
 //!
-//! Sixteen lanes against eight (4×2), interleaved whole renders at 4096×3072, median of 5
-//! (2-core AMD EPYC with AVX-512): with AVX2 the dragon took 0.91 of the time, the peers'
-//! 2-triangle scene 0.93 and its 1M-triangle scene 0.92; the AVX-512 build then took 0.86
-//! of AVX2's time on the 1M scene and 1.0 on the 2-triangle one (dragon 0.78 and bunny
-//! 0.76 of the eight-lane AVX2 build's). Every image was the same file.
+//! Sixteen lanes, not eight: `docs/bench/cpu-packets.md`.
 //!
 //! This is not a mirror of a WGSL function: it is the mirror's faster twin, and it gives
 //! the same image bit for bit. Lane by lane it does the mirror's operations in the

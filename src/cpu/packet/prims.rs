@@ -1,11 +1,7 @@
 //! The packet twins of `prims.rs`: the three triangle tests and the sphere test as lane
 //! loops (op for op the mirror's), and one primitive against the packet (`prim_lanes`).
-//!
-//! Möller–Trumbore and the naive test as lane loops, against the mirror's functions called
-//! a lane at a time (interleaved whole renders at 3072×2304, median of 5, user time):
-//! umbrella naive 0.25 and Möller–Trumbore 0.42 of the time, mitsubishi with shadows 0.31,
-//! bunny (Möller–Trumbore) 0.74, bb8 0.91; watertight scenes 1.04–1.05 (dragon, peers 1M;
-//! spread 0.85–1.29, median of 9), the same images.
+//! Lane loops rather than the mirror's functions a lane at a time: what they bought is in
+//! `docs/bench/cpu-packets.md`.
 
 // Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
 #![allow(clippy::needless_range_loop)]
@@ -241,11 +237,8 @@ fn edges_general<O: Origins>(tri: &Triangle, r: &Lanes<O>, sh: &ShearLanes) -> E
 /// the same values, with the triangle's and the origins' components picked once for the
 /// packet instead of by selects in every lane (component kx of `tri.a - origin` is
 /// `tri.a[kx] - origin[kx]`). The origins are permuted whole before the lane loop: read by
-/// a run-time component index inside it, they kept the loop scalar, and this path was
-/// 1.1–1.3× slower than the selects (measured 2026-12-02). Permuted, whole renders at
-/// 3072×2304 took 0.64 of the time on umbrella (watertight), 0.90 on the dragon and peers
-/// 1M, 0.89 on peers 1M with shadows (interleaved, median of 5, user time; the same
-/// images).
+/// a run-time component index inside it, they keep the loop scalar
+/// (`docs/bench/cpu-packets.md`).
 #[inline(always)]
 fn edges_uniform<O: Origins>(tri: &Triangle, r: &Lanes<O>, sh: &ShearLanes, k: [u32; 3]) -> Edges {
     let [kx, ky, kz] = k.map(|k| k as usize);
@@ -400,11 +393,8 @@ const CULL_SLACK: f32 = 1.0 / 1024.0;
 /// negative: a miss. The check is skipped (the test run) where it could round otherwise:
 /// an infinite |f × d|², or a bound under 2⁻¹⁰⁰ where products may be subnormal.
 /// `tests`, below, tries rays just outside and inside the slack against `hit_sphere`.
-/// Shadow rays cull (user time on the peers' 2-triangle scene with shadows 0.48 → 0.37 s,
-/// median of 5 interleaved renders at 2048×1536), and so do camera rays in the search
-/// over every primitive since packets have sixteen lanes: the check is one vector then
-/// (AVX-512), and the peers' scene without shadows took 0.82 of the time at 4096×3072
-/// (median of 5 interleaved; with eight lanes on AVX2 it had been slower, 0.28 → 0.32 s).
+/// Shadow rays cull, and so do camera rays in the search over every primitive: with
+/// sixteen lanes the check is one vector (AVX-512) (`docs/bench/cpu-packets.md`).
 #[inline(always)]
 pub(super) fn sphere_lanes<O: Origins>(
     s: &Sphere,

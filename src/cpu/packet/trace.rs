@@ -87,10 +87,8 @@ pub(super) fn box_lanes<B: Build, O: Origins>(
 /// The end of `box_interval` for one lane, from its slabs' near and far distances: (t_min,
 /// bound) clipped to the slabs, the far end at the nearest far distance (NaNs passed
 /// over) widened by `BOX_SLACK` of itself. Returns the interval (t0, t1); the box is hit
-/// where t0 <= t1 (the caller's compare, all lanes at once). (Each far distance was
-/// widened before the nearest was taken, as the shader did: three widenings where one
-/// gives the same bits. One thread, 6 rounds, both builds at once on the two cores:
-/// peers 100k primary 0.968, 1M 0.958, 100k with shadows 0.980.)
+/// where t0 <= t1 (the caller's compare, all lanes at once). One widening, of the nearest
+/// exit (`docs/bench/cpu-packets.md`).
 #[inline(always)]
 fn clip_interval(near: [f32; 3], far: [f32; 3], t_min: f32, bound: f32) -> (f32, f32) {
     let mut t0 = t_min;
@@ -101,12 +99,9 @@ fn clip_interval(near: [f32; 3], far: [f32; 3], t_min: f32, bound: f32) -> (f32,
     f = if far[0] < f { far[0] } else { f };
     f = if far[1] < f { far[1] } else { f };
     f = if far[2] < f { far[2] } else { f };
-    // An exit at -∞ stays -∞, a miss (see `box_interval`).
-    let f = if f < -INFINITY {
-        f
-    } else {
-        f + f.abs() * BOX_SLACK
-    };
+    // An exit at -∞ is raised to -INFINITY, a miss (see `box_interval`).
+    let f = if -INFINITY > f { -INFINITY } else { f };
+    let f = f + f.abs() * BOX_SLACK;
     let t1 = if f < bound { f } else { bound };
     (t0, t1)
 }
@@ -266,10 +261,8 @@ pub(super) fn descend<B: Build, O: Origins>(
     if ml != 0 && mr != 0 {
         // The nearer child by the split axis and the direction of the first lane that
         // enters either: the left child holds the lower centres on that axis, so a ray
-        // running down it meets the right child first. (It was a vote of the lanes that
-        // enter both, by their entry distances: sixteen comparisons a step for an order
-        // that the axis gives as well. Interleaved, `glint bench`, 3 rounds: dragon 0.93,
-        // bunny 0.97, peers 1M 0.97, 100k 0.98.) The order changes no lane's answer
+        // running down it meets the right child first (not a vote of the lanes by their
+        // entry distances: docs/bench/cpu-packets.md). The order changes no lane's answer
         // wherever every primitive's computed hit lies in its box's computed interval;
         // where one does not (the naive test far from the origin), the order decides
         // which hit the bound culls. The shader's query rays met that (4 of 100000, with
