@@ -282,6 +282,15 @@ impl Drop for FinishWrites {
     }
 }
 
+/// The cache `render` reads and writes (none with `--no-cache`), and the guard that waits
+/// for its writes when dropped.
+fn render_cache(no_cache: bool) -> (Option<Arc<Cache>>, FinishWrites) {
+    let cache = glint::cache::default_dir()
+        .filter(|_| !no_cache)
+        .map(|dir| Arc::new(Cache::new(cache_settings(dir))));
+    (cache.clone(), FinishWrites(cache))
+}
+
 fn options(frame: FrameArgs) -> RenderOptions {
     RenderOptions {
         size: frame.size,
@@ -356,10 +365,7 @@ fn render(
     common: CommonArgs,
 ) -> Result<()> {
     let start = Instant::now();
-    let cache = glint::cache::default_dir()
-        .filter(|_| !no_cache)
-        .map(|dir| Arc::new(Cache::new(cache_settings(dir))));
-    let _finish = FinishWrites(cache.clone());
+    let (cache, _finish) = render_cache(no_cache);
     // Before any work: the folder exists and a file can be made there.
     let output = Output::file(output)?;
     let scene = load(scene, common.confine, cache, &common.set)?;
@@ -408,10 +414,7 @@ fn render_frames(
 ) -> Result<()> {
     glint::render::check_template(template)?;
     glint::image::check_extension(template)?;
-    let cache = glint::cache::default_dir()
-        .filter(|_| !no_cache)
-        .map(|dir| Arc::new(Cache::new(cache_settings(dir))));
-    let _finish = FinishWrites(cache.clone());
+    let (cache, _finish) = render_cache(no_cache);
     let mut scene = load(scene, common.confine, cache, &common.set)?;
     if scene.camera_keys.is_empty() && !chatter.quiet {
         eprintln!(
