@@ -178,42 +178,32 @@ impl SceneBuffers {
         let lights: Vec<Light> = scene.lights.iter().map(light).collect();
         let texels = texture_buffers(&scene.textures);
         stages.record("flatten", t_flat.elapsed());
-        if let Some(old) = old.filter(|o| o.spheres == spheres && o.triangles == triangles) {
-            let buf = SceneBuffers {
-                normals,
-                uvs,
-                texels,
-                stages: Timings(stages.into_times()),
-                ..SceneBuffers::with_bvh(
-                    params,
-                    spheres,
-                    triangles,
-                    materials,
-                    lights,
-                    (old.nodes, old.prim_ids),
-                    algo,
-                    scene.shadows,
-                )
-            };
-            return (buf, true);
-        }
+        let kept = old.filter(|o| o.spheres == spheres && o.triangles == triangles);
+        let reused = kept.is_some();
+        let tree = match kept {
+            Some(old) => (old.nodes, old.prim_ids),
+            None => {
+                let bvh = cached_bvh(scene.cache.as_deref(), &stages, &spheres, &triangles);
+                (bvh.nodes, bvh.prim_ids)
+            }
+        };
         let buf = SceneBuffers {
             normals,
             uvs,
             texels,
-            ..SceneBuffers::assemble_cached(
-                scene.cache.as_deref(),
-                stages,
+            stages: Timings(stages.into_times()),
+            ..SceneBuffers::with_bvh(
                 params,
                 spheres,
                 triangles,
                 materials,
                 lights,
+                tree,
                 algo,
                 scene.shadows,
             )
         };
-        (buf, false)
+        (buf, reused)
     }
 
     /// For the CPU's packet tracer only: `triangles[prim_ids[k]]` at k (a zeroed triangle
@@ -262,35 +252,8 @@ impl SceneBuffers {
         algo: TriangleAlgorithm,
         shadows: bool,
     ) -> Self {
-        Self::assemble_cached(
-            None,
-            Stages::new(),
-            params,
-            spheres,
-            triangles,
-            materials,
-            lights,
-            algo,
-            shadows,
-        )
-    }
-
-    /// [`SceneBuffers::assemble`], the BVH read from `cache` or stored there when it holds
-    /// it or the scene is worth it (a scene's [`Scene::cache`]); its stages timed into
-    /// `stages`, which the buffers keep.
-    #[allow(clippy::too_many_arguments)]
-    fn assemble_cached(
-        cache: Option<&crate::cache::Cache>,
-        stages: Stages,
-        params: Params,
-        spheres: Vec<Sphere>,
-        triangles: Vec<Triangle>,
-        materials: Vec<Material>,
-        lights: Vec<Light>,
-        algo: TriangleAlgorithm,
-        shadows: bool,
-    ) -> Self {
-        let bvh = cached_bvh(cache, &stages, &spheres, &triangles);
+        let stages = Stages::new();
+        let bvh = cached_bvh(None, &stages, &spheres, &triangles);
         SceneBuffers {
             stages: Timings(stages.into_times()),
             ..SceneBuffers::with_bvh(

@@ -149,7 +149,7 @@ fn textures_claiming_65535_squared_pixels_are_refused() {
         let mut c = kind.to_vec();
         c.extend_from_slice(data);
         png.extend_from_slice(&c);
-        png.extend_from_slice(&crc32(&c).to_be_bytes());
+        png.extend_from_slice(&common::crc32(&c).to_be_bytes());
     };
     let mut ihdr = Vec::new();
     ihdr.extend_from_slice(&65535u32.to_be_bytes());
@@ -215,19 +215,4 @@ fn a_texture_linked_out_of_the_folder_is_refused_when_confined() {
     );
     let (code, text, _) = check_capped(&p, &[]);
     assert_eq!(code, Some(0), "{text}");
-}
-
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &b in bytes {
-        c ^= b as u32;
-        for _ in 0..8 {
-            c = if c & 1 != 0 {
-                (c >> 1) ^ 0xEDB8_8320
-            } else {
-                c >> 1
-            };
-        }
-    }
-    !c
 }

@@ -456,22 +456,6 @@ fn untextured_scenes_are_untouched() {
     }
 }
 
-/// The CRC-32 of PNG chunks (ISO 3309), bit by bit.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = 0xffff_ffffu32;
-    for &b in bytes {
-        c ^= b as u32;
-        for _ in 0..8 {
-            c = if c & 1 != 0 {
-                0xedb8_8320 ^ (c >> 1)
-            } else {
-                c >> 1
-            };
-        }
-    }
-    !c
-}
-
 fn error(dir: &Path, material: &str) -> String {
     match quad(dir, material) {
         Ok(_) => panic!("{material}: no error"),
@@ -513,7 +497,7 @@ fn bad_textures_and_coordinates_are_named() {
     ihdr.extend([8, 2, 0, 0, 0]);
     png.extend(13u32.to_be_bytes());
     png.extend(&ihdr);
-    png.extend(crc32(&ihdr).to_be_bytes());
+    png.extend(common::crc32(&ihdr).to_be_bytes());
     std::fs::write(dir.join("huge.png"), &png).unwrap();
     let e = error(&dir, "map_kd = \"huge.png\"");
     assert!(

@@ -751,3 +751,19 @@ pub fn specials() -> Vec<f32> {
     v.extend(negatives);
     v
 }
+
+/// The CRC-32 of PNG chunks (ISO 3309), bit by bit.
+pub fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
