@@ -53,6 +53,11 @@ if [ "${#missing[@]}" -gt 0 ]; then
     $sudo apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 export GLINT_ADAPTER="${GLINT_ADAPTER:-llvmpipe}"
+# A fresh clone gains nothing from incremental builds but their disk (1.6 GB). The whole
+# run needs about 6 GB under target/; say what the disk has, so a full disk reads as such.
+export CARGO_INCREMENTAL=0
+disk_free() { df -Pm . | awk 'NR == 2 { printf "%.1f GB free", $4 / 1024 }'; }
+echo "glint: disk before the build: $(disk_free)"
 # The tests start a Vulkan device in many processes: Mesa prints a conformance warning for
 # lavapipe at each start, and its window-system code complains where XDG_RUNTIME_DIR is
 # unset (the library sets no environment variable; `glint` itself quiets both at start).
@@ -176,7 +181,7 @@ else
 fi
 
 echo
-echo "=== glint test summary ==="
+echo "=== glint test summary ($(du -sm target | awk '{ printf "%.1f GB", $1 / 1024 }') under target/, $(disk_free) after) ==="
 for s in "${summary[@]}"; do echo "$s"; done
 if [ "$skip_gpu" = 1 ]; then
     echo "*** GLINT_SKIP_GPU=1: the GPU tests did NOT run; nothing here shows GPU = CPU. ***"
