@@ -1,11 +1,12 @@
-// glint's kernel, part 1 of 6: what the parts share. The override constants, the
+// glint's kernel, part 1 of 7: what the parts share. The override constants, the
 // constants, the structs shared with Rust and their bindings, the ray and hit records and
 // the small helpers.
 //
 // The kernel is `exact.wgsl` + `common.wgsl` + `prims.wgsl` + `texture.wgsl` + `trace.wgsl` +
-// `whitted.wgsl`, joined in that order at build time (`src/gpu/mod.rs`, `SHADER_SOURCE`). Each
-// part has its mirror in `src/cpu/` with the same stem (`exact.rs`, `common.rs`, `prims.rs`,
-// `texture.rs`, `trace.rs`, `whitted.rs`): every function, with the same name, in
+// `whitted.wgsl` + `aov.wgsl`, joined in that order at build time (`src/gpu/mod.rs`,
+// `SHADER_SOURCE`). Each part has its mirror in `src/cpu/` with the same stem (`exact.rs`,
+// `common.rs`, `prims.rs`, `texture.rs`, `trace.rs`, `whitted.rs`, `aov.rs`): every
+// function, with the same name, in
 // the same order, with the same operations in the same order. Change both in one commit;
 // the GPU-against-CPU tests catch the one that was forgotten.
 //

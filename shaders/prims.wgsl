@@ -1,4 +1,4 @@
-// glint's kernel, part 2 of 6: the primitives (after `common.wgsl`; see its header for
+// glint's kernel, part 2 of 7: the primitives (after `common.wgsl`; see its header for
 // how the parts are joined and mirrored). Everything that knows what a sphere or a
 // triangle is lives here: the intersection tests, and the only switches on a primitive's
 // kind, `hit_prim`, `is_triangle` (for `prim_normal` and `prim_material`) and `shading_at`

@@ -1,4 +1,4 @@
-// glint's kernel, part 4 of 6: rays through the scene (after `common.wgsl` and
+// glint's kernel, part 4 of 7: rays through the scene (after `common.wgsl` and
 // `prims.wgsl`; see the first's header for how the parts are joined and mirrored). The
 // camera, the searches for the nearest hit and for a blocker (every primitive, or the
 // BVH), shading, and the entry points. Mirror: `src/cpu/trace.rs`.

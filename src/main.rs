@@ -299,6 +299,7 @@ fn options(frame: FrameArgs) -> RenderOptions {
         max_depth: frame.max_depth,
         math: frame.math.into(),
         inexact_driver: frame.inexact_driver,
+        aovs: frame.aov.map(|a| a.0).unwrap_or_default(),
     }
 }
 
@@ -480,7 +481,13 @@ fn compare(
         .save(diff)
         .with_context(|| "writing the difference image")?;
     println!("difference image: {}", diff.display());
-    Ok(verdict(report.gpu_vs_cpu.within(tolerance), tolerance))
+    // The AOVs count bit for bit whatever the tolerance: ids and hit masks have no
+    // "close enough".
+    let aovs_equal = report.aovs.iter().all(|(_, d)| d.differing == 0);
+    Ok(verdict(
+        report.gpu_vs_cpu.within(tolerance) && aovs_equal,
+        tolerance,
+    ))
 }
 
 /// The verdict line (equal by `tolerance`, or not) and the exit status it means.

@@ -4,8 +4,8 @@
 use std::mem::{offset_of, size_of};
 
 use glint::buffers::{
-    BvhNode, HitOut, Light, Material, Params, RayIn, Sphere, Texture, Triangle, TriangleUvs,
-    VertexNormals,
+    AovOut, BvhNode, HitOut, Light, Material, Params, RayIn, Sphere, Texture, Triangle,
+    TriangleUvs, VertexNormals,
 };
 use glint::gpu::SHADER_SOURCE;
 
@@ -50,7 +50,7 @@ fn shader_parses_and_validates() {
     )
     .validate(&module)
     .unwrap_or_else(|e| panic!("{}", e.emit_to_string(SHADER_SOURCE)));
-    for entry in ["render", "query"] {
+    for entry in ["render", "render_rgba8", "render_aov", "query"] {
         assert!(
             module.entry_points.iter().any(|e| e.name == entry),
             "no entry point {entry}"
@@ -127,6 +127,14 @@ fn shared_structs_match_wgsl() {
     );
     check_struct!(&m, RayIn, "RayIn", [origin, t_min, dir, t_max]);
     check_struct!(&m, HitOut, "HitOut", [t, prim, u, v]);
+    check_struct!(
+        &m,
+        AovOut,
+        "AovOut",
+        [
+            position, t, geo_normal, depth, normal, prim, albedo, material
+        ]
+    );
 }
 
 /// The twin: a struct that drifted (a field moved) is caught by the same comparison.

@@ -93,6 +93,22 @@ pub struct FrameArgs {
     /// not change; a proof of exactness on a driver that is exact already (lavapipe).
     #[arg(long)]
     pub inexact_driver: bool,
+    /// AOVs beside the colour, comma-separated: t, depth, position, geo_normal, normal,
+    /// albedo, prim_id, object_id, material_id, mask (docs/aov.md). An EXR holds them as
+    /// channels (`depth`, `normal.X`, ...); a PNG gets a PNG for each beside it
+    /// (OUT.normal.png). `compare` compares the GPU's with the mirror's, bit for bit.
+    #[arg(long, value_name = "LIST", value_parser = parse_aovs)]
+    pub aov: Option<AovList>,
+}
+
+/// `--aov`'s list, in [`glint::render::Aov::ALL`]'s order.
+#[derive(Clone, Debug)]
+pub struct AovList(pub Vec<glint::render::Aov>);
+
+fn parse_aovs(s: &str) -> Result<AovList, String> {
+    glint::render::Aov::parse_list(s)
+        .map(AovList)
+        .map_err(|e| e.to_string())
 }
 
 /// `--math`: glint's [`glint::buffers::Math`].

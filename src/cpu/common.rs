@@ -1,9 +1,9 @@
-//! The CPU mirror of `shaders/common.wgsl`, the second of the kernel's six parts (after `exact.wgsl`): the
+//! The CPU mirror of `shaders/common.wgsl`, the second of the kernel's seven parts (after `exact.wgsl`): the
 //! ray and hit records, the shader's module-scope globals (`params`, the buffers, the
 //! override constants) as the fields of [`Globals`], and the small helpers.
 //!
-//! The mirror is five files with the shader's stems (`common.rs`, `prims.rs`,
-//! `texture.rs`, `trace.rs`, `whitted.rs`), each with the same functions as its WGSL part, with the same names, in the
+//! The mirror is six files with the shader's stems (`common.rs`, `prims.rs`,
+//! `texture.rs`, `trace.rs`, `whitted.rs`, `aov.rs`), each with the same functions as its WGSL part, with the same names, in the
 //! same order, doing the same operations in the same order. Written generic over [`Real`]:
 //! instantiated at f32 it is the shader's twin (bit for bit on lavapipe), at f64 it is the
 //! ground truth that error is measured against. Un-idiomatic Rust (`if !(x > 0)`, index

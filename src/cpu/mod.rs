@@ -1,6 +1,7 @@
 //! The CPU tracers: the f32 mirror of the shader and the f64 ground truth, both from the
 //! one generic `trace.rs`, rows in parallel with rayon.
 
+pub mod aov;
 pub mod common;
 pub mod count;
 pub mod exact;
@@ -16,7 +17,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use rayon::prelude::*;
 
-use crate::buffers::{HitOut, RayIn, SceneBuffers, Specialisation};
+use crate::buffers::{AovOut, HitOut, RayIn, SceneBuffers, Specialisation};
 use crate::image::Image;
 use crate::scene::Scene;
 use count::NoCount;
@@ -326,6 +327,35 @@ fn globals_f64<'a>(scene: &Scene, buf: &'a SceneBuffers, spec: Specialisation) -
         buf,
         spec,
         count: NoCount,
+    }
+}
+
+/// Rows `y0 .. y0 + rows` of the frame's AOVs (row-major): WGSL `render_aov`'s, one
+/// `aov_pixel` per pixel, rows in parallel; the f64 ground truth's where `f64_scene` is
+/// given (its values rounded to f32 at the end).
+pub fn render_aov_rows(
+    f64_scene: Option<&Scene>,
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    y0: u32,
+    rows: u32,
+) -> Vec<AovOut> {
+    fn rows_of<R: Real>(g: &Globals<R>, y0: u32, rows: u32) -> Vec<AovOut> {
+        let w = g.cam.width as usize;
+        let mut out = vec![AovOut::default(); w * rows as usize];
+        out.par_chunks_mut(w.max(1))
+            .enumerate()
+            .for_each(|(r, row)| {
+                let j = y0 + r as u32;
+                for (i, px) in row.iter_mut().enumerate() {
+                    *px = aov::aov_pixel(g, i as u32, j);
+                }
+            });
+        out
+    }
+    match f64_scene {
+        Some(s) => rows_of(&globals_f64(s, buf, spec), y0, rows),
+        None => rows_of(&globals_f32(buf, spec), y0, rows),
     }
 }
 

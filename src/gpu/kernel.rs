@@ -50,12 +50,16 @@ pub(super) enum Entry {
     /// `render_rgba8`: the lean frame.
     RenderRgba8,
     Query,
+    /// `render_aov`: the frame's AOVs.
+    Aov,
 }
 
 /// Where `render` writes (`image` in the shader).
 const IMAGE_BINDING: u32 = 5;
 /// Where `render_rgba8` writes (`image_rgba8` in the shader).
 pub(super) const RGBA8_BINDING: u32 = 14;
+/// Where `render_aov` writes (`aov_out` in the shader).
+const AOV_BINDING: u32 = 16;
 
 /// Where a kernel's pipelines get their shader module.
 enum ModuleSource {
@@ -78,12 +82,14 @@ pub struct Kernel {
     render_layout: wgpu::BindGroupLayout,
     pub(super) rgba8_layout: wgpu::BindGroupLayout,
     query_layout: wgpu::BindGroupLayout,
+    aov_layout: wgpu::BindGroupLayout,
     render_pipeline_layout: wgpu::PipelineLayout,
     rgba8_pipeline_layout: wgpu::PipelineLayout,
     query_pipeline_layout: wgpu::PipelineLayout,
-    /// The WGSL binding numbers of the render, render_rgba8 and query layouts, for the
-    /// exact path's binding map ([`super::exact::binding_map`]).
-    bindings: [Vec<u32>; 3],
+    aov_pipeline_layout: wgpu::PipelineLayout,
+    /// The WGSL binding numbers of the render, render_rgba8, query and render_aov layouts,
+    /// for the exact path's binding map ([`super::exact::binding_map`]).
+    bindings: [Vec<u32>; 4],
     pipelines: Mutex<HashMap<(Specialisation, Entry), wgpu::ComputePipeline>>,
     /// The device's `/` and `sqrt` are correctly rounded ([`super::rounds_correctly`]):
     /// [`crate::buffers::Math::Exact`] compiles no corrections here.
@@ -338,10 +344,17 @@ impl Kernel {
             let with = |binding| [render.clone(), vec![storage_entry(binding, false)]].concat();
             let numbers = |e: &[wgpu::BindGroupLayoutEntry]| e.iter().map(|e| e.binding).collect();
             let (render, rgba8) = (with(IMAGE_BINDING), with(RGBA8_BINDING));
-            let bindings = [numbers(&render), numbers(&rgba8), numbers(&query)];
+            let aov = with(AOV_BINDING);
+            let bindings = [
+                numbers(&render),
+                numbers(&rgba8),
+                numbers(&query),
+                numbers(&aov),
+            ];
             let render_layout = layout("render", &render);
             let rgba8_layout = layout("render_rgba8", &rgba8);
             let query_layout = layout("query", &query);
+            let aov_layout = layout("render_aov", &aov);
             let pl = |bgl: &wgpu::BindGroupLayout| {
                 device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                     label: None,
@@ -354,6 +367,7 @@ impl Kernel {
                 render_pipeline_layout: pl(&render_layout),
                 rgba8_pipeline_layout: pl(&rgba8_layout),
                 query_pipeline_layout: pl(&query_layout),
+                aov_pipeline_layout: pl(&aov_layout),
                 bindings,
                 source,
                 text: kernel_text,
@@ -361,6 +375,7 @@ impl Kernel {
                 render_layout,
                 rgba8_layout,
                 query_layout,
+                aov_layout,
                 pipelines: Mutex::new(HashMap::new()),
                 native_rounding: super::rounds_correctly(&device.adapter_info()),
             }
@@ -400,6 +415,7 @@ impl Kernel {
             Entry::Render => ("render", 0),
             Entry::RenderRgba8 => ("render_rgba8", 1),
             Entry::Query => ("query", 2),
+            Entry::Aov => ("render_aov", 3),
         };
         // The exact path specialises while writing the SPIR-V, so its pipeline gets no
         // constants; the WGSL path hands them to wgpu.
@@ -425,6 +441,7 @@ impl Kernel {
                     Entry::Render => &self.render_pipeline_layout,
                     Entry::RenderRgba8 => &self.rgba8_pipeline_layout,
                     Entry::Query => &self.query_pipeline_layout,
+                    Entry::Aov => &self.aov_pipeline_layout,
                 }),
                 module,
                 entry_point: Some(entry_point),
@@ -500,6 +517,7 @@ impl Kernel {
     fn output_binding(&self, entry: Entry) -> (u32, &wgpu::BindGroupLayout) {
         match entry {
             Entry::RenderRgba8 => (RGBA8_BINDING, &self.rgba8_layout),
+            Entry::Aov => (AOV_BINDING, &self.aov_layout),
             _ => (IMAGE_BINDING, &self.render_layout),
         }
     }
@@ -674,6 +692,23 @@ impl Kernel {
         self.bands(device, queue, src, spec, Entry::RenderRgba8, max_rows, band)
     }
 
+    /// The frame's AOVs (WGSL `render_aov`: what the ray through each pixel's centre hit),
+    /// in tiles of at most `max_rows` rows handed to `band(first_row, pixels)` as they are
+    /// read back, top to bottom. The same values as the mirror's
+    /// [`crate::cpu::render_aov_rows`], in every bit, wherever the colour image is.
+    pub fn render_aov_bands(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buf: &SceneBuffers,
+        spec: Specialisation,
+        max_rows: u32,
+        band: &mut dyn FnMut(u32, &[crate::buffers::AovOut]),
+    ) -> Result<GpuTimings, GpuError> {
+        let src = Source::Kept(buf);
+        self.bands(device, queue, src, spec, Entry::Aov, max_rows, band)
+    }
+
     /// The render entry point `entry` in tiles, each tile's pixels (of type `T`, as that
     /// entry point writes them) handed to `band`.
     #[allow(clippy::too_many_arguments)]
@@ -703,8 +738,14 @@ impl Kernel {
             1
         };
         let by_work = ((MAX_TILE_PIXELS / per_pixel) / width as u64).max(1) as u32;
+        // A tile's pixels in one storage buffer: `tile_rows` counts 16 bytes a pixel, and
+        // an AOV pixel is 64.
+        let l = device.limits();
+        let limit = l.max_storage_buffer_binding_size.min(l.max_buffer_size);
+        let by_bytes = (limit / (width as u64 * px_bytes)).max(1) as u32;
         let rows = tile_rows(device, width, height)
             .min(by_work)
+            .min(by_bytes)
             .min(max_rows.max(1));
         let tile_bytes = rows as u64 * width as u64 * px_bytes;
         check_size(device, "one tile of the image", tile_bytes)?;

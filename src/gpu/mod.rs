@@ -18,8 +18,8 @@ pub use kernel::{GpuTimings, Kernel, RENDER_STORAGE_BUFFERS, tile_rows};
 pub use resident::Resident;
 
 /// The WGSL source of the kernel: `shaders/exact.wgsl`, `common.wgsl`, `prims.wgsl`,
-/// `texture.wgsl`, `trace.wgsl` and `whitted.wgsl`, joined in that order (WGSL needs no
-/// declaration before use).
+/// `texture.wgsl`, `trace.wgsl`, `whitted.wgsl` and `aov.wgsl`, joined in that order (WGSL
+/// needs no declaration before use).
 pub const SHADER_SOURCE: &str = concat!(
     include_str!("../../shaders/exact.wgsl"),
     include_str!("../../shaders/common.wgsl"),
@@ -27,6 +27,7 @@ pub const SHADER_SOURCE: &str = concat!(
     include_str!("../../shaders/texture.wgsl"),
     include_str!("../../shaders/trace.wgsl"),
     include_str!("../../shaders/whitted.wgsl"),
+    include_str!("../../shaders/aov.wgsl"),
 );
 
 /// `text` (a kernel's WGSL, `exact.wgsl` first) with `div_rn` and `sqrt_rn` reduced to the

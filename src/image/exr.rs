@@ -43,14 +43,21 @@ fn attribute(out: &mut Vec<u8>, name: &str, kind: &str, value: &[u8]) {
     out.extend_from_slice(value);
 }
 
-/// The magic number, version, header and offset table of a `width`×`height` file.
-fn preamble(width: u32, height: u32) -> Vec<u8> {
+/// OpenEXR's pixel type of a 32-bit unsigned integer channel.
+const UINT: i32 = 0;
+/// OpenEXR's pixel type of a 32-bit float channel.
+const FLOAT: i32 = 2;
+
+/// The magic number, version, header and offset table of a `width`×`height` file whose
+/// channels are `channels` (name and pixel type, in the file's order: sorted by name),
+/// every one 4 bytes a pixel.
+fn preamble(width: u32, height: u32, channels: &[(&str, i32)]) -> Vec<u8> {
     let mut out = vec![0x76, 0x2f, 0x31, 0x01, 2, 0, 0, 0];
     let mut chlist = Vec::new();
-    for (name, _) in CHANNELS {
+    for &(name, kind) in channels {
         chlist.extend_from_slice(name.as_bytes());
         chlist.push(0);
-        chlist.extend_from_slice(&2i32.to_le_bytes()); // FLOAT
+        chlist.extend_from_slice(&kind.to_le_bytes());
         chlist.extend_from_slice(&[0, 0, 0, 0]); // pLinear, reserved
         chlist.extend_from_slice(&1i32.to_le_bytes()); // xSampling
         chlist.extend_from_slice(&1i32.to_le_bytes()); // ySampling
@@ -69,7 +76,7 @@ fn preamble(width: u32, height: u32) -> Vec<u8> {
     attribute(&mut out, "screenWindowCenter", "v2f", &[0; 8]);
     attribute(&mut out, "screenWindowWidth", "float", &1f32.to_le_bytes());
     out.push(0);
-    let block = 8 + row_bytes(width);
+    let block = 8 + 4 * width as u64 * channels.len() as u64;
     let first = out.len() as u64 + 8 * height as u64;
     for y in 0..height as u64 {
         out.extend_from_slice(&(first + y * block).to_le_bytes());
@@ -104,7 +111,7 @@ impl ExrStream {
         };
         let file = std::fs::File::create(&stream.tmp).map_err(|e| stream.io(e))?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
-        w.write_all(&preamble(width, height))
+        w.write_all(&preamble(width, height, &CHANNELS.map(|(n, _)| (n, FLOAT))))
             .map_err(|e| stream.io(e))?;
         stream.writer = Some(w);
         Ok(stream)
@@ -165,6 +172,97 @@ impl ExrStream {
         set_pending(None);
         Ok(())
     }
+}
+
+/// The values of one channel of [`write_channels`], one a pixel, row-major.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ChannelData {
+    /// 32-bit floats, stored exactly.
+    F32(Vec<f32>),
+    /// 32-bit unsigned integers (OpenEXR's UINT), stored exactly.
+    U32(Vec<u32>),
+}
+
+impl ChannelData {
+    fn len(&self) -> usize {
+        match self {
+            ChannelData::F32(v) => v.len(),
+            ChannelData::U32(v) => v.len(),
+        }
+    }
+
+    /// The little-endian bytes of pixels `range`.
+    fn extend_row(&self, out: &mut Vec<u8>, range: std::ops::Range<usize>) {
+        match self {
+            ChannelData::F32(v) => v[range].iter().for_each(|x| out.extend(x.to_le_bytes())),
+            ChannelData::U32(v) => v[range].iter().for_each(|x| out.extend(x.to_le_bytes())),
+        }
+    }
+}
+
+/// Writes a `width`×`height` OpenEXR of any channels (single part, uncompressed
+/// scanlines, every value exact), atomically: through a temporary file renamed over
+/// `path`. The channels are stored sorted by name, as the format requires; each must hold
+/// one value a pixel and the names must differ.
+pub fn write_channels(
+    path: &Path,
+    width: u32,
+    height: u32,
+    channels: &[(String, ChannelData)],
+) -> Result<(), ImageError> {
+    if format_of(path)? != Format::Exr {
+        return Err(ImageError::Extension(path.to_owned()));
+    }
+    let mut sorted: Vec<&(String, ChannelData)> = channels.iter().collect();
+    sorted.sort_by(|a, b| a.0.as_bytes().cmp(b.0.as_bytes()));
+    let pixels = width as usize * height as usize;
+    let other = |m: String| ImageError::Io {
+        path: path.to_owned(),
+        error: std::io::Error::other(m),
+    };
+    for pair in sorted.windows(2) {
+        if pair[0].0 == pair[1].0 {
+            return Err(other(format!("two channels are named {:?}", pair[0].0)));
+        }
+    }
+    if let Some((name, _)) = sorted.iter().find(|(_, d)| d.len() != pixels) {
+        return Err(other(format!(
+            "channel {name:?} does not hold one value a pixel"
+        )));
+    }
+    let kinds: Vec<(&str, i32)> = sorted
+        .iter()
+        .map(|(n, d)| {
+            let kind = match d {
+                ChannelData::F32(_) => FLOAT,
+                ChannelData::U32(_) => UINT,
+            };
+            (n.as_str(), kind)
+        })
+        .collect();
+    super::write_atomically(path, |tmp| {
+        let io = |error| ImageError::Io {
+            path: path.to_owned(),
+            error,
+        };
+        let file = std::fs::File::create(tmp).map_err(io)?;
+        let mut w = BufWriter::with_capacity(1 << 20, file);
+        w.write_all(&preamble(width, height, &kinds)).map_err(io)?;
+        let w_px = width as usize;
+        let size = (4 * w_px * sorted.len()) as i32;
+        let mut row = Vec::with_capacity(8 + size as usize);
+        for y in 0..height as usize {
+            row.clear();
+            row.extend_from_slice(&(y as i32).to_le_bytes());
+            row.extend_from_slice(&size.to_le_bytes());
+            for (_, d) in &sorted {
+                d.extend_row(&mut row, y * w_px..(y + 1) * w_px);
+            }
+            w.write_all(&row).map_err(io)?;
+        }
+        let f = w.into_inner().map_err(|e| io(e.into_error()))?;
+        f.sync_data().map_err(io)
+    })
 }
 
 impl Drop for ExrStream {

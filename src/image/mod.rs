@@ -4,7 +4,7 @@
 mod exr;
 
 pub use crate::shared::encoding::{Encoding, SRGB_THRESHOLDS, UnknownEncoding, to_u8_srgb};
-pub use exr::ExrStream;
+pub use exr::{ChannelData, ExrStream, write_channels};
 
 use std::path::{Path, PathBuf};
 

@@ -6,11 +6,13 @@ use std::fmt;
 use std::path::PathBuf;
 use std::time::Duration;
 
+use super::aov::{Aov, AovImage, IdMap};
 use super::job::Warning;
 use super::renderer::{RenderError, RenderOptions};
 use crate::buffers::{SceneBuffers, Specialisation};
 use crate::compare::{Diff, diff, diff_image};
 use crate::gpu::{Gpu, GpuError};
+use crate::image::ChannelData;
 use crate::image::Image;
 use crate::scene::{Scene, TriangleAlgorithm};
 
@@ -59,6 +61,41 @@ pub struct CompareReport {
     pub ray_query: RayQueryResult,
     /// Where the GPU's and the mirror's images differ ([`crate::compare::diff_image`]).
     pub difference: Image,
+    /// Each AOV that [`RenderOptions::aovs`] named: the GPU's against the mirror's.
+    pub aovs: Vec<(Aov, AovDiff)>,
+}
+
+/// One AOV of the GPU's frame against the mirror's, bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AovDiff {
+    /// Pixels where some bit of the AOV differs.
+    pub differing: usize,
+    /// The first such pixel, (x, y).
+    pub first: Option<(u32, u32)>,
+}
+
+/// Where `aov` of `a` and of `b` (frames of `width` pixels a row) differ in some bit.
+pub fn diff_aov(aov: Aov, a: &AovImage, b: &AovImage) -> AovDiff {
+    let (ca, cb) = (a.channels(aov), b.channels(aov));
+    let mut out = AovDiff::default();
+    let bits = |d: &ChannelData, k: usize| match d {
+        ChannelData::F32(v) => v[k].to_bits(),
+        ChannelData::U32(v) => v[k],
+    };
+    for k in 0..a.pixels.len().min(b.pixels.len()) {
+        if ca
+            .iter()
+            .zip(&cb)
+            .any(|((_, x), (_, y))| bits(x, k) != bits(y, k))
+        {
+            out.differing += 1;
+            if out.first.is_none() {
+                out.first = Some((k as u32 % a.width.max(1), k as u32 / a.width.max(1)));
+            }
+        }
+    }
+    out.differing += a.pixels.len().abs_diff(b.pixels.len());
+    out
 }
 
 /// Renders `scene` with `options` on `gpu`'s shader, on the f32 CPU mirror and in f64, and
@@ -74,7 +111,12 @@ pub fn compare(
     let algo = options.triangle.unwrap_or(scene.triangle);
     let mut warnings: Vec<Warning> = scene.warnings.iter().cloned().map(Warning::Scene).collect();
     warnings.extend(scene.range_warnings(algo).into_iter().map(Warning::Range));
-    super::check_memory(w, h, w as u64 * h as u64 * 16 * 4)?;
+    let aov_bytes = if options.aovs.is_empty() {
+        0
+    } else {
+        2 * 64 + 8
+    };
+    super::check_memory(w, h, w as u64 * h as u64 * (16 * 4 + aov_bytes))?;
     let mut buf = SceneBuffers::new(scene, w, h, algo);
     options.apply(&mut buf);
     let spec = Specialisation::for_scene(&buf).with_math(options.math_mode());
@@ -93,6 +135,31 @@ pub fn compare(
         }
         Err(e) => RayQueryResult::NotMeasured(e),
     };
+    let mut aovs = Vec::new();
+    if !options.aovs.is_empty() {
+        let mut on_gpu = Vec::with_capacity(w as usize * h as usize);
+        kernel.render_aov_bands(
+            &gpu.device,
+            &gpu.queue,
+            &buf,
+            spec,
+            u32::MAX,
+            &mut |_, px| on_gpu.extend_from_slice(px),
+        )?;
+        let frame = |pixels| AovImage {
+            width: w,
+            height: h,
+            pixels,
+            ids: IdMap::new(scene),
+        };
+        let g = frame(on_gpu);
+        let c = frame(crate::cpu::render_aov_rows(None, &buf, spec, 0, h));
+        aovs = options
+            .aovs
+            .iter()
+            .map(|&a| (a, diff_aov(a, &g, &c)))
+            .collect();
+    }
     Ok(CompareReport {
         scene: scene.path.clone(),
         width: w,
@@ -107,6 +174,7 @@ pub fn compare(
         gpu_vs_f64: diff(&g, &r),
         ray_query,
         difference: diff_image(&g, &c),
+        aovs,
     })
 }
 
@@ -155,6 +223,13 @@ impl fmt::Display for CompareReport {
                 x.hit_miss, x.max_abs, x.rms, x.differing_pixels
             )
         };
+        for (aov, d) in &self.aovs {
+            write!(f, "gpu vs cpu, AOV {aov}: {} differing pixels", d.differing)?;
+            if let Some((x, y)) = d.first {
+                write!(f, " (the first at {x},{y})")?;
+            }
+            writeln!(f)?;
+        }
         line(f, "gpu", &self.gpu_vs_f64)?;
         match &self.ray_query {
             RayQueryResult::Measured {

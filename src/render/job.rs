@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 use web_time::Instant;
 
+use super::aov::{Aov, AovImage, IdMap};
 use super::output::{Output, Sink};
 use super::renderer::{RenderError, RenderOptions, Renderer, Tracer, TracerKind};
 use crate::buffers::{SceneBuffers, Specialisation};
@@ -140,6 +141,11 @@ pub struct RenderReport {
     pub total: Duration,
     /// The image, for [`Output::Memory`].
     pub image: Option<Image>,
+    /// The AOVs, for [`Output::Memory`] where [`RenderOptions::aovs`] named some.
+    pub aovs: Option<AovImage>,
+    /// The AOVs' PNGs written beside a PNG's colour ([`AovImage::png_path`]); an EXR holds
+    /// its AOVs as channels of its own.
+    pub aov_files: Vec<std::path::PathBuf>,
 }
 
 impl fmt::Display for RenderReport {
@@ -322,6 +328,8 @@ impl<'a> Job<'a> {
             run.stages.record_all(&s.load_stages.0);
         }
         let (w, h, algo) = prepare(pick(&owned, borrowed), &output, &options, &mut run)?;
+        let aovs = options.aovs.clone();
+        check_aov_output(&output, &aovs, w, h)?;
         // Only the f64 tracer reads the scene's primitives once they are flat, so the
         // others take them from a scene of the job's own (the dragon's are 35 MB, a sixth
         // of the former peak).
@@ -356,13 +364,57 @@ impl<'a> Job<'a> {
         if let Some(note) = renderer.note() {
             run.note(Note::Backend(note.to_string()));
         }
-        let mut sink = Sink::open(&output, w, h, scene.encoding)?;
+        // An EXR with AOVs is written whole once they are traced (its rows interleave the
+        // colour's channels and theirs).
+        let to_sink = match &output {
+            Output::Exr(_) if !aovs.is_empty() => Output::Memory,
+            o => o.clone(),
+        };
+        let mut sink = Sink::open(&to_sink, w, h, scene.encoding)?;
         let math = options.math_mode();
-        let traced = trace(renderer, scene, buf, math, keep, &mut sink, &mut run)?;
+        let keep_geometry = keep || !aovs.is_empty();
+        let traced = trace(
+            renderer,
+            scene,
+            buf,
+            math,
+            keep_geometry,
+            &mut sink,
+            &mut run,
+        )?;
         if run.cancelled() {
             return Err(RenderError::Cancelled);
         }
-        let image = run.stages.time("write", || sink.finish())?;
+        let mut aov_image = None;
+        let mut aov_files = Vec::new();
+        if !aovs.is_empty() {
+            let spec = Specialisation::for_scene(buf).with_math(math);
+            let t = Instant::now();
+            let pixels = trace_aovs(renderer, traced.tracer, scene, buf, spec)?;
+            run.stages.record("aov", t.elapsed());
+            let a = AovImage {
+                width: w,
+                height: h,
+                pixels,
+                ids: IdMap::new(scene),
+            };
+            // The AOVs' files first: the colour's, renamed into place last, marks the
+            // frame done (`render --frames --resume`).
+            if let Output::Png(p) = &output {
+                let t = Instant::now();
+                aov_files = a.write_pngs(p, &aovs)?;
+                run.stages.record("write", t.elapsed());
+            }
+            aov_image = Some(a);
+        }
+        let mut image = run.stages.time("write", || sink.finish())?;
+        if let (Output::Exr(p), Some(a), Some(colour)) = (&output, &aov_image, &image) {
+            let channels = a.with_colour(colour, &aovs);
+            run.stages
+                .time("write", || crate::image::write_channels(p, w, h, &channels))?;
+            image = None;
+        }
+        let aov_image = aov_image.filter(|_| output == Output::Memory);
         let t_wait = Instant::now();
         if cache.is_some_and(|c| c.finish_writes() > 0) {
             run.stages.record("cache wait", t_wait.elapsed());
@@ -385,6 +437,8 @@ impl<'a> Job<'a> {
             stages: run.stages.into_times(),
             total: start.elapsed(),
             image,
+            aovs: aov_image,
+            aov_files,
         })
     }
 }
@@ -423,6 +477,59 @@ fn prepare(
     let band = band_rows(w, h, GPU_BAND_MIB);
     super::check_memory(w, h, output.bytes_at_once(w, h, band))?;
     Ok((w, h, algo))
+}
+
+/// Checks, before any work, that `aovs` can go to `output` (a PNG's AOVs each to a PNG of
+/// its own, which must be writable) and that the frame of them fits in memory.
+fn check_aov_output(output: &Output, aovs: &[Aov], w: u32, h: u32) -> Result<(), RenderError> {
+    if aovs.is_empty() {
+        return Ok(());
+    }
+    if let Output::Png(p) = output {
+        AovImage::check_png(p, aovs)?;
+        for &a in aovs {
+            crate::image::check_writable(&AovImage::png_path(p, a))?;
+        }
+    }
+    // The records, the colour held whole, and an EXR's channels (at most 26 of 4 bytes).
+    let per_pixel = size_of::<crate::buffers::AovOut>() as u64 + 16 + 26 * 4;
+    super::check_memory(w, h, w as u64 * h as u64 * per_pixel)?;
+    Ok(())
+}
+
+/// The frame's AOVs on the tracer that made its colour (`tracer`: the CPU's after `auto`'s
+/// fallback), all at once.
+fn trace_aovs(
+    renderer: &Renderer,
+    tracer: TracerKind,
+    scene: &Scene,
+    buf: &SceneBuffers,
+    spec: Specialisation,
+) -> Result<Vec<crate::buffers::AovOut>, RenderError> {
+    let (w, h) = (buf.params.width, buf.params.height);
+    let gpu = match renderer.tracer() {
+        Tracer::Gpu(g) | Tracer::GpuRq(g) => Some(g),
+        _ => None,
+    };
+    let kernel = match (tracer, gpu) {
+        (TracerKind::Gpu, Some(g)) => Some((g, g.compute_kernel(spec)?)),
+        (TracerKind::GpuRq, Some(g)) => Some((g, g.ray_query_kernel()?)),
+        _ => None,
+    };
+    let Some((gpu, kernel)) = kernel else {
+        let f64_scene = (tracer == TracerKind::CpuF64).then_some(scene);
+        return Ok(crate::cpu::render_aov_rows(f64_scene, buf, spec, 0, h));
+    };
+    let mut out = Vec::with_capacity(w as usize * h as usize);
+    kernel.render_aov_bands(
+        &gpu.device,
+        &gpu.queue,
+        buf,
+        spec,
+        u32::MAX,
+        &mut |_, px| out.extend_from_slice(px),
+    )?;
+    Ok(out)
 }
 
 /// What [`trace`] did.

@@ -9,6 +9,8 @@
 //!   interactive viewers (`glint view`).
 //! - [`render_frames`]: the frames of a scene's camera path, each to its own file, the
 //!   scene's buffers made once.
+//! - [`Aov`]: the AOVs (depth, normals, albedo, ids, ...) a job writes beside the colour
+//!   ([`RenderOptions::aovs`]), as an [`AovImage`].
 //! - [`compare()`]: the GPU against its CPU mirror and both against the f64 ground truth, as
 //!   a [`CompareReport`].
 //!
@@ -24,6 +26,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod aov;
 mod compare;
 mod frames;
 mod job;
@@ -32,7 +35,8 @@ mod memory;
 mod output;
 mod renderer;
 
-pub use compare::{CompareReport, RayQueryResult, compare};
+pub use aov::{Aov, AovError, AovImage, IdMap, UnknownAov};
+pub use compare::{AovDiff, CompareReport, RayQueryResult, compare, diff_aov};
 pub use frames::{FrameDone, FrameRange, FramesError, check_template, frame_path, render_frames};
 pub use job::{Event, Job, Note, RenderReport, Warning};
 pub use live::{Live, Rebuilt};

@@ -100,6 +100,9 @@ pub struct RenderOptions {
     /// (up to ±2 ULP): with exact math the image must not change (`glint compare
     /// --inexact-driver`).
     pub inexact_driver: bool,
+    /// The AOVs to write beside the colour (docs/aov.md), in [`super::Aov::ALL`]'s order;
+    /// empty (the default) renders colour alone and compiles none of their code.
+    pub aovs: Vec<super::Aov>,
 }
 
 impl RenderOptions {
@@ -154,6 +157,9 @@ pub enum RenderError {
     /// The job was cancelled ([`super::Job::cancel_on`]).
     #[error("cancelled")]
     Cancelled,
+    /// The AOVs cannot be written as asked.
+    #[error(transparent)]
+    Aov(#[from] super::AovError),
     /// The output is the scene file itself.
     #[error("{}: the output would overwrite the scene file", .0.display())]
     OverwritesScene(std::path::PathBuf),

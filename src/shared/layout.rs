@@ -311,6 +311,33 @@ pub struct RayIn {
     pub t_max: f32,
 }
 
+/// One pixel's arbitrary output variables (AOVs): what the primary ray through the pixel's
+/// centre hit, written by WGSL `render_aov` and its mirror `cpu::aov::aov_pixel`. Must
+/// match WGSL `struct AovOut` (64 bytes). On a miss `t` and `depth` are −1, `prim` and
+/// `material` are `PRIM_NONE` and the vectors are 0. What each field means, its units and
+/// frame: docs/aov.md.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct AovOut {
+    /// The hit point, origin + dir·t, world space. Offset 0.
+    pub position: [f32; 3],
+    /// Distance along the (unit) primary ray. Offset 12.
+    pub t: f32,
+    /// The geometric normal, unit, turned to face the ray. Offset 16.
+    pub geo_normal: [f32; 3],
+    /// Camera-space depth: t · (dir · forward), along the camera's forward axis. Offset 28.
+    pub depth: f32,
+    /// The shading normal: the geometric one, or the interpolated vertex normals of a
+    /// smooth triangle, turned to the geometric normal's side. Offset 32.
+    pub normal: [f32; 3],
+    /// The primitive hit, as `HitOut::prim` (`TRIANGLE_BIT` for triangles). Offset 44.
+    pub prim: u32,
+    /// kd after textures (the diffuse albedo). Offset 48.
+    pub albedo: [f32; 3],
+    /// The material's index in [`crate::scene::Scene::materials`]. Offset 60.
+    pub material: u32,
+}
+
 /// The answer to one query ray. Must match WGSL `struct HitOut` (16 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

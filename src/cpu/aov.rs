@@ -1,0 +1,53 @@
+//! The CPU mirror of `shaders/aov.wgsl`: the arbitrary output variables (AOVs) of a pixel,
+//! what the primary ray through its centre hit (see [`super::common`] for the mirror's
+//! rules).
+
+use super::common::{Globals, Hit, Ray};
+use super::count::{Count, RayKind};
+use super::prims::{prim_material, prim_normal, shading_at};
+use super::texture::albedo;
+use super::trace::{camera_ray, closest_hit};
+use crate::buffers::{AovOut, PRIM_NONE};
+use crate::shared::real::Real;
+
+/// WGSL `aov_pixel`: the AOVs of pixel (i, j), from the ray through its centre whatever
+/// the antialiasing, as `shade` sees the hit: the point, the geometric normal turned to
+/// face the ray, the shading normal, kd after textures, and the depth t·(dir·forward).
+pub fn aov_pixel<R: Real, C: Count>(g: &Globals<R, C>, i: u32, j: u32) -> AovOut {
+    let half = R::ONE / (R::ONE + R::ONE);
+    let ray: Ray<R> = camera_ray(g, i, j, half, half);
+    g.count.next_kind(RayKind::Camera);
+    let hit: Hit<R> = closest_hit(g, ray, R::ZERO, R::INFINITY);
+    if hit.prim == PRIM_NONE {
+        let zero = [0.0f32; 3];
+        return AovOut {
+            position: zero,
+            t: -1.0,
+            geo_normal: zero,
+            depth: -1.0,
+            normal: zero,
+            prim: PRIM_NONE,
+            albedo: zero,
+            material: PRIM_NONE,
+        };
+    }
+    let mat = prim_material(g, &hit);
+    let a = albedo(g, &hit, &g.buf.materials[mat as usize]);
+    let p = ray.origin + ray.dir * hit.t;
+    let mut n = prim_normal(g, &hit, p);
+    if n.dot(ray.dir) > R::ZERO {
+        n = -n;
+    }
+    let sh = shading_at(g, &hit, p, n);
+    let depth = hit.t * ray.dir.dot(g.cam.forward);
+    AovOut {
+        position: p.to_f32(),
+        t: hit.t.to_f32(),
+        geo_normal: n.to_f32(),
+        depth: depth.to_f32(),
+        normal: sh.n.to_f32(),
+        prim: hit.prim,
+        albedo: a.kd.to_f32(),
+        material: mat,
+    }
+}

@@ -1,0 +1,444 @@
+//! AOVs (arbitrary output variables): which of them a render writes ([`Aov`]), a frame of
+//! them ([`AovImage`]), and how they are stored: as channels of the colour's EXR, or as
+//! PNGs beside the colour's (docs/aov.md says what each one means).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use crate::buffers::{AovOut, PRIM_NONE, TRIANGLE_BIT};
+use crate::image::{ChannelData, ImageError};
+use crate::scene::Scene;
+
+/// One AOV. Each describes the primary ray through the pixel's centre, whatever the
+/// antialiasing, so ids and normals are never blends of two surfaces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Aov {
+    /// Distance along the unit primary ray to the hit (−1 on a miss).
+    T,
+    /// Camera-space depth: the hit's distance along the camera's forward axis (−1 on a miss).
+    Depth,
+    /// The hit point, world space.
+    Position,
+    /// The geometric normal, unit, world space, turned to face the camera.
+    GeoNormal,
+    /// The shading normal (the interpolated vertex normals of a smooth mesh, else the
+    /// geometric normal), unit, world space, on the geometric normal's side.
+    Normal,
+    /// The diffuse reflectance kd, after textures.
+    Albedo,
+    /// The primitive hit: spheres 0.. in file order, then triangles.
+    PrimId,
+    /// The object hit: each sphere, then each `[[triangles]]` entry and each mesh.
+    ObjectId,
+    /// The material's index in [`Scene::materials`].
+    MaterialId,
+    /// 1 where the ray hit something, else 0.
+    Mask,
+}
+
+/// An AOV name that is not one.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown AOV {0:?}: the AOVs are {names}", names = Aov::names())]
+pub struct UnknownAov(pub String);
+
+/// Why AOVs could not be written where they were asked for.
+#[derive(Debug, thiserror::Error)]
+pub enum AovError {
+    /// An unknown name.
+    #[error(transparent)]
+    Unknown(#[from] UnknownAov),
+    /// `position` has no PNG form.
+    #[error(
+        "{}: the AOV `{aov}` needs an EXR output (-o NAME.exr): a PNG holds no signed \
+         coordinates",
+        path.display()
+    )]
+    NotInPng {
+        /// The colour's PNG.
+        path: PathBuf,
+        /// The AOV.
+        aov: Aov,
+    },
+    /// An id beyond a PNG's 24 bits.
+    #[error(
+        "{}: {aov} {id} does not fit the PNG's 24 bits: write an EXR (-o NAME.exr)",
+        path.display()
+    )]
+    IdTooLarge {
+        /// The AOV's PNG.
+        path: PathBuf,
+        /// The AOV.
+        aov: Aov,
+        /// The id.
+        id: u32,
+    },
+}
+
+impl Aov {
+    /// Every AOV, in the order files and reports list them.
+    pub const ALL: [Aov; 10] = [
+        Aov::T,
+        Aov::Depth,
+        Aov::Position,
+        Aov::GeoNormal,
+        Aov::Normal,
+        Aov::Albedo,
+        Aov::PrimId,
+        Aov::ObjectId,
+        Aov::MaterialId,
+        Aov::Mask,
+    ];
+
+    /// Its name on the command line, in Python and in channel names.
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::T => "t",
+            Aov::Depth => "depth",
+            Aov::Position => "position",
+            Aov::GeoNormal => "geo_normal",
+            Aov::Normal => "normal",
+            Aov::Albedo => "albedo",
+            Aov::PrimId => "prim_id",
+            Aov::ObjectId => "object_id",
+            Aov::MaterialId => "material_id",
+            Aov::Mask => "mask",
+        }
+    }
+
+    /// Every name, comma-separated.
+    pub fn names() -> String {
+        Aov::ALL.map(Aov::name).join(", ")
+    }
+
+    /// Its channels' suffixes: `X`, `Y`, `Z` for a point or a direction, `R`, `G`, `B` for
+    /// the albedo, none for a scalar.
+    pub fn components(self) -> &'static [&'static str] {
+        match self {
+            Aov::Position | Aov::GeoNormal | Aov::Normal => &["X", "Y", "Z"],
+            Aov::Albedo => &["R", "G", "B"],
+            _ => &[],
+        }
+    }
+
+    /// Its channels' names in an EXR: `depth`, or `normal.X`, `normal.Y`, `normal.Z`.
+    pub fn channel_names(self) -> Vec<String> {
+        match self.components() {
+            [] => vec![self.name().to_string()],
+            c => c.iter().map(|s| format!("{}.{s}", self.name())).collect(),
+        }
+    }
+
+    /// Whether it is an integer id (stored as 32-bit unsigned integers, exactly).
+    pub fn is_id(self) -> bool {
+        matches!(self, Aov::PrimId | Aov::ObjectId | Aov::MaterialId)
+    }
+
+    /// A comma-separated list (`depth,normal,prim_id`): the AOVs in [`Aov::ALL`]'s order,
+    /// each once.
+    pub fn parse_list(list: &str) -> Result<Vec<Aov>, UnknownAov> {
+        let mut out = list
+            .split(',')
+            .map(|s| s.trim().parse::<Aov>())
+            .collect::<Result<Vec<_>, _>>()?;
+        out.sort();
+        out.dedup();
+        Ok(out)
+    }
+}
+
+impl FromStr for Aov {
+    type Err = UnknownAov;
+
+    fn from_str(s: &str) -> Result<Aov, UnknownAov> {
+        Aov::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| UnknownAov(s.to_string()))
+    }
+}
+
+impl fmt::Display for Aov {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// How a frame's ids are numbered for its user, from the shader's primitive ids.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct IdMap {
+    /// The scene's spheres (ids 0..spheres).
+    spheres: u32,
+    /// The first triangle of each triangle object (`[[triangles]]` entry or mesh), in
+    /// [`Scene::triangle_sources`]' order.
+    object_firsts: Vec<u32>,
+}
+
+impl IdMap {
+    /// The numbering of `scene`'s primitives and objects.
+    pub fn new(scene: &Scene) -> IdMap {
+        IdMap {
+            spheres: scene.sphere_sources.len() as u32,
+            object_firsts: scene
+                .triangle_sources
+                .iter()
+                .map(|(first, _)| *first as u32)
+                .collect(),
+        }
+    }
+
+    /// The primitive id of shader id `prim` (`TRIANGLE_BIT` for triangles): spheres
+    /// first, then triangles; `PRIM_NONE` stays.
+    pub fn prim_id(&self, prim: u32) -> u32 {
+        match prim {
+            PRIM_NONE => PRIM_NONE,
+            p if p & TRIANGLE_BIT != 0 => self.spheres + (p & !TRIANGLE_BIT),
+            p => p,
+        }
+    }
+
+    /// The object id of shader id `prim`: a sphere's own index, or the spheres' count plus
+    /// the index of the triangle's object; `PRIM_NONE` stays.
+    pub fn object_id(&self, prim: u32) -> u32 {
+        match prim {
+            PRIM_NONE => PRIM_NONE,
+            p if p & TRIANGLE_BIT != 0 => {
+                let k = p & !TRIANGLE_BIT;
+                let group = self.object_firsts.partition_point(|&f| f <= k);
+                self.spheres + group.saturating_sub(1) as u32
+            }
+            p => p,
+        }
+    }
+}
+
+/// A frame of AOVs, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Each pixel's record, as the tracer wrote it (`prim` is the shader's id: see
+    /// [`AovImage::ids`]).
+    pub pixels: Vec<AovOut>,
+    /// The numbering of the scene's primitives and objects.
+    pub ids: IdMap,
+}
+
+impl AovImage {
+    /// The values of `aov` at every pixel: one `F32` channel a component, or one `U32`
+    /// channel for an id; named as in an EXR.
+    pub fn channels(&self, aov: Aov) -> Vec<(String, ChannelData)> {
+        let f =
+            |get: &dyn Fn(&AovOut) -> f32| ChannelData::F32(self.pixels.iter().map(get).collect());
+        let u =
+            |get: &dyn Fn(&AovOut) -> u32| ChannelData::U32(self.pixels.iter().map(get).collect());
+        let data: Vec<ChannelData> = match aov {
+            Aov::T => vec![f(&|p| p.t)],
+            Aov::Depth => vec![f(&|p| p.depth)],
+            Aov::Position => (0..3).map(|c| f(&|p| p.position[c])).collect(),
+            Aov::GeoNormal => (0..3).map(|c| f(&|p| p.geo_normal[c])).collect(),
+            Aov::Normal => (0..3).map(|c| f(&|p| p.normal[c])).collect(),
+            Aov::Albedo => (0..3).map(|c| f(&|p| p.albedo[c])).collect(),
+            Aov::PrimId => vec![u(&|p| self.ids.prim_id(p.prim))],
+            Aov::ObjectId => vec![u(&|p| self.ids.object_id(p.prim))],
+            Aov::MaterialId => vec![u(&|p| p.material)],
+            Aov::Mask => vec![f(&|p| if p.prim == PRIM_NONE { 0.0 } else { 1.0 })],
+        };
+        aov.channel_names().into_iter().zip(data).collect()
+    }
+
+    /// Where `aov`'s PNG goes beside the colour's `colour` (`out.png`: `out.normal.png`).
+    pub fn png_path(colour: &Path, aov: Aov) -> PathBuf {
+        let stem = colour.file_stem().unwrap_or_default().to_string_lossy();
+        colour.with_file_name(format!("{stem}.{}.png", aov.name()))
+    }
+
+    /// Checks, before any work, that every AOV of `aovs` has a PNG form.
+    pub fn check_png(colour: &Path, aovs: &[Aov]) -> Result<(), AovError> {
+        match aovs.iter().find(|&&a| a == Aov::Position) {
+            Some(&aov) => Err(AovError::NotInPng {
+                path: colour.to_owned(),
+                aov,
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// The colour's `[r, g, b, t]` pixels as the EXR channels `R`, `G`, `B` and `A`, then
+    /// each AOV of `aovs` ([`AovImage::channels`]): what [`crate::image::write_channels`]
+    /// writes for a render with AOVs to an EXR.
+    pub fn with_colour(
+        &self,
+        colour: &crate::image::Image,
+        aovs: &[Aov],
+    ) -> Vec<(String, ChannelData)> {
+        let mut out: Vec<(String, ChannelData)> = ["R", "G", "B", "A"]
+            .iter()
+            .enumerate()
+            .map(|(c, name)| {
+                let v = colour.pixels.iter().map(|p| p[c]).collect();
+                (name.to_string(), ChannelData::F32(v))
+            })
+            .collect();
+        for &a in aovs {
+            out.extend(self.channels(a));
+        }
+        out
+    }
+
+    /// Writes each AOV of `aovs` to its PNG beside `colour` ([`AovImage::png_path`]), each
+    /// atomically, as docs/aov.md maps it: `t` and `depth` 16-bit grey, linear from 0 to
+    /// the frame's largest value (written in the file's `glint:max` text chunk), 0 on a
+    /// miss; normals 8-bit RGB of (n + 1) / 2, black on a miss; `albedo` 8-bit RGB; ids
+    /// 8-bit RGB of id + 1 (red the lowest byte; 0 on a miss); `mask` 8-bit grey, 255 on
+    /// a hit. Returns the files written.
+    pub fn write_pngs(
+        &self,
+        colour: &Path,
+        aovs: &[Aov],
+    ) -> Result<Vec<PathBuf>, super::RenderError> {
+        AovImage::check_png(colour, aovs)?;
+        let mut written = Vec::new();
+        for &aov in aovs {
+            let path = AovImage::png_path(colour, aov);
+            let (bytes, color, depth, text) = self.png_bytes(aov, &path)?;
+            let (w, h) = (self.width, self.height);
+            crate::image::write_atomically(&path, |tmp| {
+                write_png(tmp, w, h, color, depth, &bytes, text.as_deref())
+            })?;
+            written.push(path);
+        }
+        Ok(written)
+    }
+
+    /// The PNG bytes of `aov`, its colour type and bit depth, and its `glint:max` text.
+    #[allow(clippy::type_complexity)]
+    fn png_bytes(
+        &self,
+        aov: Aov,
+        path: &Path,
+    ) -> Result<(Vec<u8>, png::ColorType, png::BitDepth, Option<String>), AovError> {
+        use png::{BitDepth, ColorType};
+        let hit = |p: &AovOut| p.prim != PRIM_NONE;
+        let unit = |x: f32| crate::image::to_u8(x);
+        Ok(match aov {
+            Aov::T | Aov::Depth => {
+                let value = |p: &AovOut| if aov == Aov::T { p.t } else { p.depth };
+                let max = self
+                    .pixels
+                    .iter()
+                    .filter(|p| hit(p))
+                    .map(value)
+                    .fold(0.0f32, |m, v| if v > m { v } else { m });
+                let bytes = self
+                    .pixels
+                    .iter()
+                    .flat_map(|p| {
+                        let q = if hit(p) && max > 0.0 {
+                            ((value(p) / max).clamp(0.0, 1.0) * 65535.0).round() as u16
+                        } else {
+                            0
+                        };
+                        q.to_be_bytes()
+                    })
+                    .collect();
+                (
+                    bytes,
+                    ColorType::Grayscale,
+                    BitDepth::Sixteen,
+                    Some(format!("{max:?}")),
+                )
+            }
+            Aov::GeoNormal | Aov::Normal => {
+                let n = |p: &AovOut| {
+                    if aov == Aov::Normal {
+                        p.normal
+                    } else {
+                        p.geo_normal
+                    }
+                };
+                let bytes = self
+                    .pixels
+                    .iter()
+                    .flat_map(|p| match hit(p) {
+                        true => n(p).map(|x| unit(x * 0.5 + 0.5)),
+                        false => [0; 3],
+                    })
+                    .collect();
+                (bytes, ColorType::Rgb, BitDepth::Eight, None)
+            }
+            Aov::Albedo => {
+                let bytes = self
+                    .pixels
+                    .iter()
+                    .flat_map(|p| p.albedo.map(unit))
+                    .collect();
+                (bytes, ColorType::Rgb, BitDepth::Eight, None)
+            }
+            Aov::PrimId | Aov::ObjectId | Aov::MaterialId => {
+                let (_, data) = self.channels(aov).remove(0);
+                let ChannelData::U32(ids) = data else {
+                    unreachable!("ids are u32 channels")
+                };
+                let mut bytes = Vec::with_capacity(ids.len() * 3);
+                for id in ids {
+                    let v = id.wrapping_add(1);
+                    if v >= 1 << 24 {
+                        return Err(AovError::IdTooLarge {
+                            path: path.to_owned(),
+                            aov,
+                            id,
+                        });
+                    }
+                    bytes.extend_from_slice(&v.to_le_bytes()[..3]);
+                }
+                (bytes, ColorType::Rgb, BitDepth::Eight, None)
+            }
+            Aov::Mask => {
+                let bytes = self
+                    .pixels
+                    .iter()
+                    .map(|p| if hit(p) { 255 } else { 0 })
+                    .collect();
+                (bytes, ColorType::Grayscale, BitDepth::Eight, None)
+            }
+            Aov::Position => {
+                return Err(AovError::NotInPng {
+                    path: path.to_owned(),
+                    aov,
+                });
+            }
+        })
+    }
+}
+
+/// Writes one PNG of raw samples (`depth` bits, big-endian where 16), with an optional
+/// `glint:max` text chunk.
+fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    color: png::ColorType,
+    depth: png::BitDepth,
+    bytes: &[u8],
+    max: Option<&str>,
+) -> Result<(), ImageError> {
+    let io = |error: std::io::Error| ImageError::Io {
+        path: path.to_owned(),
+        error,
+    };
+    let file = std::fs::File::create(path).map_err(io)?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    enc.set_color(color);
+    enc.set_depth(depth);
+    let png_err = |e: png::EncodingError| io(std::io::Error::other(e.to_string()));
+    if let Some(m) = max {
+        enc.add_text_chunk("glint:max".to_string(), m.to_string())
+            .map_err(png_err)?;
+    }
+    let mut w = enc.write_header().map_err(png_err)?;
+    w.write_image_data(bytes).map_err(png_err)?;
+    w.finish().map_err(png_err)
+}
