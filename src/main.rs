@@ -387,6 +387,9 @@ fn render(
     let report = report?;
     if !quiet {
         println!("{report}");
+        for f in &report.aov_files {
+            println!("{}", f.display());
+        }
     }
     if verbose {
         let total: f64 = report.stages.iter().map(|(_, d)| d.as_secs_f64()).sum();

@@ -382,6 +382,38 @@ fn png_aovs_are_written_beside_the_colour() {
     );
     let depth = image::open(dir.join("out.depth.png")).unwrap();
     assert_eq!(depth.color(), image::ColorType::L16);
+    let depth = depth.into_luma16();
+    // 65535 at the nearest hit, 1 at the farthest, 0 at a miss; min and max in tEXt.
+    let bytes = std::fs::read(dir.join("out.depth.png")).unwrap();
+    let reader = png::Decoder::new(std::io::Cursor::new(bytes))
+        .read_info()
+        .unwrap();
+    let text: Vec<(String, String)> = reader
+        .info()
+        .uncompressed_latin1_text
+        .iter()
+        .map(|t| (t.keyword.clone(), t.text.clone()))
+        .collect();
+    let hits: Vec<(usize, f32)> = a
+        .pixels
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.prim != PRIM_NONE)
+        .map(|(k, p)| (k, p.depth))
+        .collect();
+    let near = hits.iter().min_by(|x, y| x.1.total_cmp(&y.1)).unwrap();
+    let far = hits.iter().max_by(|x, y| x.1.total_cmp(&y.1)).unwrap();
+    assert_eq!(
+        text,
+        [
+            ("glint:min".to_string(), format!("{:?}", near.1)),
+            ("glint:max".to_string(), format!("{:?}", far.1))
+        ]
+    );
+    let at = |k: usize| depth.get_pixel(k as u32 % 48, k as u32 / 48).0[0];
+    assert_eq!((at(near.0), at(far.0)), (65535, 1));
+    let miss = a.pixels.iter().position(|p| p.prim == PRIM_NONE).unwrap();
+    assert_eq!(at(miss), 0);
 
     let refused = dir.join("refused.png");
     let e = Job::borrowed(&scene, Output::file(&refused).unwrap())

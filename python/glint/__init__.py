@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 import threading
-from typing import Any, Callable, Dict, Optional, Tuple, Union
+from typing import Any, Callable, Dict, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -29,6 +29,7 @@ from ._glint import (
     _renderers_made,
     _save,
     adapters,
+    aovs,
     backends,
     load,
 )
@@ -39,6 +40,7 @@ __all__ = [
     "Scene",
     "SceneError",
     "adapters",
+    "aovs",
     "backends",
     "compare",
     "load",
@@ -84,7 +86,8 @@ def render(
     math: str = "exact",
     threads: Optional[int] = None,
     progress: Optional[Progress] = None,
-) -> np.ndarray:
+    aovs: Optional[Sequence[str]] = None,
+) -> Union[np.ndarray, Dict[str, np.ndarray]]:
     """Renders ``scene`` and returns float32 of shape (height, width, 4).
 
     The channels are linear RGB and the primary ray's hit distance t (-1 for a miss):
@@ -101,6 +104,14 @@ def render(
     (height, width, 4), numpy's rows first. Raises ``glint.SceneError`` for a bad scene,
     ``OSError`` for a file that cannot be read, ``glint.RenderError`` when the render
     fails, ``KeyboardInterrupt`` on Ctrl-C.
+
+    With ``aovs``, a list of AOV names (``t``, ``depth``, ``position``, ``geo_normal``,
+    ``normal``, ``albedo``, ``prim_id``, ``object_id``, ``material_id``, ``mask``), it
+    returns a dict: ``"color"``, the array above, and one array per AOV, of the ray
+    through each pixel's centre: (height, width) for ``t``, ``depth``, ``mask`` and the
+    ids, (height, width, 3) for ``position``, the normals and ``albedo``; float32, except
+    the ids (uint32, 4294967295 on a miss). docs/aov.md defines each. An unknown name
+    raises ``ValueError``.
     """
     return renderer(backend, adapter, threads).render(
         scene,
@@ -110,6 +121,7 @@ def render(
         max_depth=max_depth,
         math=math,
         progress=progress,
+        aovs=None if aovs is None else list(aovs),
     )
 
 

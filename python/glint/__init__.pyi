@@ -1,7 +1,7 @@
 """Type stubs of the ``glint`` package."""
 
 import os
-from typing import Any, Callable, Dict, Optional, Tuple, Union
+from typing import Any, Callable, Dict, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -11,6 +11,7 @@ from ._glint import Renderer as Renderer
 from ._glint import Scene as Scene
 from ._glint import SceneError as SceneError
 from ._glint import adapters as adapters
+from ._glint import aovs as aovs
 from ._glint import backends as backends
 from ._glint import load as load
 
@@ -22,6 +23,7 @@ def renderer(
 ) -> Renderer:
     """The process's shared Renderer for a backend, adapter and thread count."""
 
+@overload
 def render(
     scene: SceneLike,
     backend: str = "auto",
@@ -33,8 +35,25 @@ def render(
     math: str = "exact",
     threads: Optional[int] = None,
     progress: Optional[Progress] = None,
+    aovs: None = None,
 ) -> npt.NDArray[np.float32]:
     """Renders a scene: float32 (height, width, 4), RGB and the hit distance t."""
+@overload
+def render(
+    scene: SceneLike,
+    backend: str = "auto",
+    size: Optional[Tuple[int, int]] = None,
+    samples: Optional[int] = None,
+    triangle: Optional[str] = None,
+    max_depth: Optional[int] = None,
+    adapter: Optional[str] = None,
+    math: str = "exact",
+    threads: Optional[int] = None,
+    progress: Optional[Progress] = None,
+    *,
+    aovs: Sequence[str],
+) -> Dict[str, npt.NDArray[Any]]:
+    """Renders a scene and its AOVs: ``color`` and one array per AOV (docs/aov.md)."""
 
 def compare(
     scene: SceneLike,

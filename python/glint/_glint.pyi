@@ -1,7 +1,7 @@
 """Type stubs of glint's extension module (re-exported by ``glint``)."""
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -76,6 +76,7 @@ class Renderer:
     def __init__(
         self, backend: str = "auto", adapter: Optional[str] = None, threads: Optional[int] = None
     ) -> None: ...
+    @overload
     def render(
         self,
         scene: Union[Scene, _Path, Dict[str, Any]],
@@ -86,8 +87,23 @@ class Renderer:
         max_depth: Optional[int] = None,
         math: str = "exact",
         progress: Optional[Callable[[int, int], Any]] = None,
+        aovs: None = None,
     ) -> npt.NDArray[np.float32]:
         """Renders a scene: float32 (height, width, 4), RGB and the hit distance t."""
+    @overload
+    def render(
+        self,
+        scene: Union[Scene, _Path, Dict[str, Any]],
+        *,
+        size: Optional[Tuple[int, int]] = None,
+        samples: Optional[int] = None,
+        triangle: Optional[str] = None,
+        max_depth: Optional[int] = None,
+        math: str = "exact",
+        progress: Optional[Callable[[int, int], Any]] = None,
+        aovs: Sequence[str],
+    ) -> Dict[str, npt.NDArray[Any]]:
+        """Renders a scene and its AOVs: ``color`` and one array per AOV (docs/aov.md)."""
     def close(self) -> None:
         """Lets the device go; a later render raises RenderError."""
     @property
@@ -115,6 +131,9 @@ def _compare_on(
     math: str = "exact",
 ) -> Dict[str, Any]:
     """``glint compare`` on a GPU renderer's device."""
+
+def aovs() -> List[str]:
+    """The AOV names ``render(..., aovs=[...])`` takes, in order (docs/aov.md)."""
 
 def adapters() -> List[Dict[str, str]]:
     """The Vulkan adapters, best first."""

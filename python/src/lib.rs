@@ -182,6 +182,14 @@ fn backends() -> Vec<&'static str> {
     glint::Backend::NAMES.to_vec()
 }
 
+/// The AOV names `render(..., aovs=[...])` takes, in order (docs/aov.md).
+#[pyfunction]
+fn aovs() -> Vec<&'static str> {
+    glint::render::Aov::ALL
+        .map(glint::render::Aov::name)
+        .to_vec()
+}
+
 /// The extension module.
 #[pymodule]
 fn _glint(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -195,5 +203,6 @@ fn _glint(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(_renderers_made, m)?)?;
     m.add_function(wrap_pyfunction!(backends, m)?)?;
+    m.add_function(wrap_pyfunction!(aovs, m)?)?;
     Ok(())
 }

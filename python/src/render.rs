@@ -8,6 +8,7 @@ use std::time::Duration;
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use pyo3::types::PyTuple;
 
 use crate::errors::{from_panic, from_render_error};
@@ -95,7 +96,12 @@ impl Renderer {
     /// `progress(rows_done, rows_total)` while the frame is traced, on the calling thread;
     /// an exception it raises stops the render and is raised here. Ctrl-C stops the render
     /// (KeyboardInterrupt).
-    #[pyo3(signature = (scene, *, size=None, samples=None, triangle=None, max_depth=None, math="exact", progress=None))]
+    ///
+    /// With `aovs` (a list of AOV names: `t`, `depth`, `position`, `geo_normal`, `normal`,
+    /// `albedo`, `prim_id`, `object_id`, `material_id`, `mask`) it returns a dict instead:
+    /// `color`, the frame above, and one array per AOV, (height, width) for a scalar and
+    /// (height, width, 3) for a vector, float32 except the ids (uint32); docs/aov.md.
+    #[pyo3(signature = (scene, *, size=None, samples=None, triangle=None, max_depth=None, math="exact", progress=None, aovs=None))]
     #[allow(clippy::too_many_arguments)] // Python's keyword arguments
     fn render<'py>(
         &self,
@@ -107,9 +113,21 @@ impl Renderer {
         max_depth: Option<u32>,
         math: &str,
         progress: Option<Bound<'py, PyAny>>,
+        aovs: Option<Vec<String>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let scene = scene_arg(py, scene)?;
-        let options = options(size, samples, triangle, max_depth, math)?;
+        let mut options = options(size, samples, triangle, max_depth, math)?;
+        let with_aovs = aovs.is_some();
+        if let Some(names) = aovs {
+            let mut list = names
+                .iter()
+                .map(|n| n.parse::<glint::render::Aov>())
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|e| PyValueError::new_err(format!("aovs: {e}")))?;
+            list.sort();
+            list.dedup();
+            options.aovs = list;
+        }
         let inner = self.inner()?;
         render_array(
             py,
@@ -118,6 +136,7 @@ impl Renderer {
             &scene.get().state(),
             options,
             progress.as_ref(),
+            with_aovs,
         )
     }
 
@@ -209,7 +228,8 @@ enum Message {
 /// Renders on `renderer` (in `pool` where given) with the GIL released, polling for
 /// signals every 50 ms (Ctrl-C cancels the job, which the job's thread answers at its next
 /// band) and calling `progress` with the rows as they come; the frame becomes a numpy
-/// array that owns the renderer's buffer.
+/// array that owns the renderer's buffer; with `as_dict`, a dict of it (`color`) and of
+/// each AOV of `options.aovs`.
 pub(crate) fn render_array<'py>(
     py: Python<'py>,
     renderer: &glint::Renderer,
@@ -217,7 +237,9 @@ pub(crate) fn render_array<'py>(
     scene: &State,
     options: glint::RenderOptions,
     progress: Option<&Bound<'py, PyAny>>,
+    as_dict: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let aovs = options.aovs.clone();
     let cancel = Arc::new(AtomicBool::new(false));
     let dict = scene.is_from_dict();
     let s: &glint::scene::Scene = &scene.scene;
@@ -290,6 +312,59 @@ pub(crate) fn render_array<'py>(
         .ok_or_else(|| crate::errors::RenderError::new_err("the job gave no image"))?;
     let (w, h) = (image.width as usize, image.height as usize);
     let flat: Vec<f32> = image.pixels.into_flattened();
-    let array = PyArray1::from_vec(py, flat);
-    Ok(array.reshape([h, w, 4])?.into_any())
+    let array = PyArray1::from_vec(py, flat).reshape([h, w, 4])?.into_any();
+    if !as_dict {
+        return Ok(array);
+    }
+    let out = PyDict::new(py);
+    out.set_item("color", array)?;
+    if let Some(frame) = &report.aovs {
+        for &aov in &aovs {
+            out.set_item(aov.name(), aov_array(py, frame, aov)?)?;
+        }
+    }
+    Ok(out.into_any())
+}
+
+/// One AOV of `frame` as a numpy array: (height, width) for a scalar, (height, width, 3)
+/// for a vector; float32, or uint32 for an id.
+fn aov_array<'py>(
+    py: Python<'py>,
+    frame: &glint::render::AovImage,
+    aov: glint::render::Aov,
+) -> PyResult<Bound<'py, PyAny>> {
+    use glint::image::ChannelData;
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let channels = frame.channels(aov);
+    let n = channels.len();
+    let shape = |a: Bound<'py, PyAny>| -> PyResult<Bound<'py, PyAny>> {
+        match n {
+            1 => a.call_method1("reshape", ((h, w),)),
+            _ => a.call_method1("reshape", ((h, w, n),)),
+        }
+    };
+    match &channels[0].1 {
+        ChannelData::U32(_) => {
+            let mut v = Vec::with_capacity(w * h * n);
+            for k in 0..w * h {
+                for (_, c) in &channels {
+                    if let ChannelData::U32(c) = c {
+                        v.push(c[k]);
+                    }
+                }
+            }
+            shape(PyArray1::from_vec(py, v).into_any())
+        }
+        ChannelData::F32(_) => {
+            let mut v = Vec::with_capacity(w * h * n);
+            for k in 0..w * h {
+                for (_, c) in &channels {
+                    if let ChannelData::F32(c) = c {
+                        v.push(c[k]);
+                    }
+                }
+            }
+            shape(PyArray1::from_vec(py, v).into_any())
+        }
+    }
 }

@@ -44,6 +44,7 @@ def test_the_guide_has_its_examples():
     assert commands() == [
         "pip install ./python",
         "python examples/python/turntable.py scenes/bb8.toml --frames 8 --size 320x240 --out frames",
+        "python examples/python/dataset.py scenes/bb8.toml --frames 8 --seed 7 --aovs depth,normal,object_id,mask --size 320x240 --out data",
     ]
 
 
@@ -82,4 +83,17 @@ def test_the_turntable_command_runs(readme_dir):
     assert r.returncode == 0, r.stderr
     names = sorted(p.name for p in (readme_dir / "frames").iterdir())
     assert names == [f"frame_{k:05d}.png" for k in range(8)]
+    assert "[8/8]" in r.stdout
+
+
+def test_the_dataset_command_runs(readme_dir):
+    cmd = shlex.split(commands()[2])
+    cmd[0] = sys.executable
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    names = sorted(p.name for p in (readme_dir / "data").iterdir())
+    assert names == [f"frame_{k:05d}.npz" for k in range(8)] + ["manifest.json"]
+    with np.load(readme_dir / "data" / "frame_00000.npz") as shard:
+        assert sorted(shard.files) == ["color", "depth", "mask", "normal", "object_id"]
+        assert shard["normal"].shape == (240, 320, 3)
     assert "[8/8]" in r.stdout

@@ -289,9 +289,9 @@ impl AovImage {
     }
 
     /// Writes each AOV of `aovs` to its PNG beside `colour` ([`AovImage::png_path`]), each
-    /// atomically, as docs/aov.md maps it: `t` and `depth` 16-bit grey, linear from 0 to
-    /// the frame's largest value (written in the file's `glint:max` text chunk), 0 on a
-    /// miss; normals 8-bit RGB of (n + 1) / 2, black on a miss; `albedo` 8-bit RGB; ids
+    /// atomically, as docs/aov.md maps it: `t` and `depth` 16-bit grey, linear from 65535
+    /// at the frame's nearest hit to 1 at its farthest (their values in the file's
+    /// `glint:min` and `glint:max` text chunks), 0 on a miss; normals 8-bit RGB of (n + 1) / 2, black on a miss; `albedo` 8-bit RGB; ids
     /// 8-bit RGB of id + 1 (red the lowest byte; 0 on a miss); `mask` 8-bit grey, 255 on
     /// a hit. Returns the files written.
     pub fn write_pngs(
@@ -306,50 +306,63 @@ impl AovImage {
             let (bytes, color, depth, text) = self.png_bytes(aov, &path)?;
             let (w, h) = (self.width, self.height);
             crate::image::write_atomically(&path, |tmp| {
-                write_png(tmp, w, h, color, depth, &bytes, text.as_deref())
+                write_png(tmp, w, h, color, depth, &bytes, &text)
             })?;
             written.push(path);
         }
         Ok(written)
     }
 
-    /// The PNG bytes of `aov`, its colour type and bit depth, and its `glint:max` text.
+    /// The PNG bytes of `aov`, its colour type and bit depth, and its text chunks.
     #[allow(clippy::type_complexity)]
     fn png_bytes(
         &self,
         aov: Aov,
         path: &Path,
-    ) -> Result<(Vec<u8>, png::ColorType, png::BitDepth, Option<String>), AovError> {
+    ) -> Result<
+        (
+            Vec<u8>,
+            png::ColorType,
+            png::BitDepth,
+            Vec<(String, String)>,
+        ),
+        AovError,
+    > {
         use png::{BitDepth, ColorType};
         let hit = |p: &AovOut| p.prim != PRIM_NONE;
         let unit = |x: f32| crate::image::to_u8(x);
         Ok(match aov {
             Aov::T | Aov::Depth => {
                 let value = |p: &AovOut| if aov == Aov::T { p.t } else { p.depth };
-                let max = self
+                let (lo, hi) = self
                     .pixels
                     .iter()
                     .filter(|p| hit(p))
                     .map(value)
-                    .fold(0.0f32, |m, v| if v > m { v } else { m });
+                    .fold((f32::INFINITY, 0.0f32), |(lo, hi), v| {
+                        (if v < lo { v } else { lo }, if v > hi { v } else { hi })
+                    });
+                let span = hi - lo;
                 let bytes = self
                     .pixels
                     .iter()
                     .flat_map(|p| {
-                        let q = if hit(p) && max > 0.0 {
-                            ((value(p) / max).clamp(0.0, 1.0) * 65535.0).round() as u16
-                        } else {
-                            0
+                        let q = match hit(p) {
+                            false => 0,
+                            true if span > 0.0 => {
+                                1 + (((hi - value(p)) / span).clamp(0.0, 1.0) * 65534.0).round()
+                                    as u16
+                            }
+                            true => 65535,
                         };
                         q.to_be_bytes()
                     })
                     .collect();
-                (
-                    bytes,
-                    ColorType::Grayscale,
-                    BitDepth::Sixteen,
-                    Some(format!("{max:?}")),
-                )
+                let text = vec![
+                    ("glint:min".to_string(), format!("{lo:?}")),
+                    ("glint:max".to_string(), format!("{hi:?}")),
+                ];
+                (bytes, ColorType::Grayscale, BitDepth::Sixteen, text)
             }
             Aov::GeoNormal | Aov::Normal => {
                 let n = |p: &AovOut| {
@@ -367,7 +380,7 @@ impl AovImage {
                         false => [0; 3],
                     })
                     .collect();
-                (bytes, ColorType::Rgb, BitDepth::Eight, None)
+                (bytes, ColorType::Rgb, BitDepth::Eight, Vec::new())
             }
             Aov::Albedo => {
                 let bytes = self
@@ -375,7 +388,7 @@ impl AovImage {
                     .iter()
                     .flat_map(|p| p.albedo.map(unit))
                     .collect();
-                (bytes, ColorType::Rgb, BitDepth::Eight, None)
+                (bytes, ColorType::Rgb, BitDepth::Eight, Vec::new())
             }
             Aov::PrimId | Aov::ObjectId | Aov::MaterialId => {
                 let (_, data) = self.channels(aov).remove(0);
@@ -394,7 +407,7 @@ impl AovImage {
                     }
                     bytes.extend_from_slice(&v.to_le_bytes()[..3]);
                 }
-                (bytes, ColorType::Rgb, BitDepth::Eight, None)
+                (bytes, ColorType::Rgb, BitDepth::Eight, Vec::new())
             }
             Aov::Mask => {
                 let bytes = self
@@ -402,7 +415,7 @@ impl AovImage {
                     .iter()
                     .map(|p| if hit(p) { 255 } else { 0 })
                     .collect();
-                (bytes, ColorType::Grayscale, BitDepth::Eight, None)
+                (bytes, ColorType::Grayscale, BitDepth::Eight, Vec::new())
             }
             Aov::Position => {
                 return Err(AovError::NotInPng {
@@ -414,8 +427,8 @@ impl AovImage {
     }
 }
 
-/// Writes one PNG of raw samples (`depth` bits, big-endian where 16), with an optional
-/// `glint:max` text chunk.
+/// Writes one PNG of raw samples (`depth` bits, big-endian where 16), with `text`'s
+/// (keyword, text) chunks.
 fn write_png(
     path: &Path,
     width: u32,
@@ -423,7 +436,7 @@ fn write_png(
     color: png::ColorType,
     depth: png::BitDepth,
     bytes: &[u8],
-    max: Option<&str>,
+    text: &[(String, String)],
 ) -> Result<(), ImageError> {
     let io = |error: std::io::Error| ImageError::Io {
         path: path.to_owned(),
@@ -434,8 +447,8 @@ fn write_png(
     enc.set_color(color);
     enc.set_depth(depth);
     let png_err = |e: png::EncodingError| io(std::io::Error::other(e.to_string()));
-    if let Some(m) = max {
-        enc.add_text_chunk("glint:max".to_string(), m.to_string())
+    for (keyword, value) in text {
+        enc.add_text_chunk(keyword.clone(), value.clone())
             .map_err(png_err)?;
     }
     let mut w = enc.write_header().map_err(png_err)?;
