@@ -18,17 +18,10 @@ struct AovOut {
 
 @group(0) @binding(16) var<storage, read_write> aov_out: array<AovOut>;
 
-/// The AOVs of pixel (i, j): the hit of the ray through its centre, whatever the
-/// antialiasing (so ids and normals are never blends), described as `shade` sees it: the
-/// point, the geometric normal turned to face the ray, the shading normal, kd after
-/// textures, and the depth t·(dir·forward) along the camera's axis.
-fn aov_pixel(i: u32, j: u32) -> AovOut {
-    let ray = camera_ray(i, j, 0.5, 0.5);
-    let hit = closest_hit(ray, 0.0, INFINITY);
-    if hit.prim == PRIM_NONE {
-        let zero = vec3<f32>(0.0, 0.0, 0.0);
-        return AovOut(zero, -1.0, zero, -1.0, zero, PRIM_NONE, zero, PRIM_NONE);
-    }
+/// The AOVs of a hit `hit` of `ray`, as `shade` sees it: the point, the geometric normal
+/// turned to face the ray, the shading normal, kd after textures, and the depth
+/// t·(dir·forward) along the camera's axis. `hit` must be a hit, not a miss.
+fn aov_of(ray: Ray, hit: Hit) -> AovOut {
     let mat = prim_material(hit);
     let a = albedo(hit, materials[mat]);
     let p = ray.origin + ray.dir * hit.t;
@@ -39,6 +32,18 @@ fn aov_pixel(i: u32, j: u32) -> AovOut {
     let sh = shading_at(hit, p, n);
     let depth = hit.t * dot(ray.dir, params.forward);
     return AovOut(p, hit.t, n, depth, sh.n, hit.prim, a.kd, mat);
+}
+
+/// The AOVs of pixel (i, j): the hit of the ray through its centre, whatever the
+/// antialiasing (so ids and normals are never blends).
+fn aov_pixel(i: u32, j: u32) -> AovOut {
+    let ray = camera_ray(i, j, 0.5, 0.5);
+    let hit = closest_hit(ray, 0.0, INFINITY);
+    if hit.prim == PRIM_NONE {
+        let zero = vec3<f32>(0.0, 0.0, 0.0);
+        return AovOut(zero, -1.0, zero, -1.0, zero, PRIM_NONE, zero, PRIM_NONE);
+    }
+    return aov_of(ray, hit);
 }
 
 /// One invocation per pixel of the current tile, laid out as `render`'s.

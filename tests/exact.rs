@@ -77,7 +77,7 @@ fn every_kernel_reaches_the_driver_with_no_contractible_arithmetic() {
         for (name, wgsl) in kernels() {
             let src = ExactSource::compile(&wgsl, target).unwrap();
             for spec in specialisations() {
-                for entry in ["render", "render_rgba8", "query"] {
+                for entry in ["render", "render_rgba8", "query", "render_aov"] {
                     let c = spec.constants();
                     let words = src.spirv(entry, &c, &[]).unwrap();
                     let left = contractible(&words).unwrap();
@@ -97,6 +97,30 @@ fn every_kernel_reaches_the_driver_with_no_contractible_arithmetic() {
                 }
             }
         }
+    }
+}
+
+/// The AOV part of the kernel (`shaders/aov.wgsl`, last in the module) changes no word of
+/// the colour entry points' SPIR-V: a render without AOVs runs the kernel it ran before
+/// that part existed. The twin: without the part there is no `render_aov` to write.
+#[test]
+fn the_aov_part_changes_no_word_of_the_colour_kernels() {
+    let cut = SHADER_SOURCE
+        .find("// glint's kernel, part 6 of 7: arbitrary output variables")
+        .expect("aov.wgsl is in the kernel");
+    let without = ExactSource::compile(&SHADER_SOURCE[..cut], LAVAPIPE).unwrap();
+    let with = ExactSource::compile(SHADER_SOURCE, LAVAPIPE).unwrap();
+    for spec in specialisations() {
+        let c = spec.constants();
+        for entry in ["render", "render_rgba8", "query"] {
+            assert_eq!(
+                with.spirv(entry, &c, &[]).unwrap(),
+                without.spirv(entry, &c, &[]).unwrap(),
+                "{entry}"
+            );
+        }
+        assert!(with.spirv("render_aov", &c, &[]).is_ok());
+        assert!(without.spirv("render_aov", &c, &[]).is_err(), "the twin");
     }
 }
 

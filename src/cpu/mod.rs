@@ -330,9 +330,10 @@ fn globals_f64<'a>(scene: &Scene, buf: &'a SceneBuffers, spec: Specialisation) -
     }
 }
 
-/// Rows `y0 .. y0 + rows` of the frame's AOVs (row-major): WGSL `render_aov`'s, one
-/// `aov_pixel` per pixel, rows in parallel; the f64 ground truth's where `f64_scene` is
-/// given (its values rounded to f32 at the end).
+/// Rows `y0 .. y0 + rows` of the frame's AOVs (row-major): WGSL `render_aov`'s records.
+/// In f32 the centre rays go in packets (`packet::aov_tracer`, the same records as the
+/// mirror's `aov_pixel` in every bit: [`render_aov_rows_mirror`] is the twin); the f64
+/// ground truth's where `f64_scene` is given (its values rounded to f32 at the end).
 pub fn render_aov_rows(
     f64_scene: Option<&Scene>,
     buf: &SceneBuffers,
@@ -340,23 +341,96 @@ pub fn render_aov_rows(
     y0: u32,
     rows: u32,
 ) -> Vec<AovOut> {
-    fn rows_of<R: Real>(g: &Globals<R>, y0: u32, rows: u32) -> Vec<AovOut> {
-        let w = g.cam.width as usize;
-        let mut out = vec![AovOut::default(); w * rows as usize];
-        out.par_chunks_mut(w.max(1))
-            .enumerate()
-            .for_each(|(r, row)| {
-                let j = y0 + r as u32;
-                for (i, px) in row.iter_mut().enumerate() {
-                    *px = aov::aov_pixel(g, i as u32, j);
+    if let Some(s) = f64_scene {
+        return aov_rows_with(&globals_f64(s, buf, spec), y0, rows);
+    }
+    let g = packet_globals(buf, spec);
+    let trace = packet::aov_tracer(packet::Simd::Best);
+    let w = g.cam.width as usize;
+    let (pw, ph) = (packet::PACKET_W as usize, packet::PACKET_H as usize);
+    let mut out: Vec<AovOut> = bytemuck::zeroed_vec(w * rows as usize);
+    out.par_chunks_mut((w * ph).max(1))
+        .enumerate()
+        .for_each(|(b, band)| {
+            let j = y0 + (b * ph) as u32;
+            let n = band.len() / w.max(1);
+            for i in (0..w).step_by(pw) {
+                let px = trace(&g, i as u32, j);
+                let cols = pw.min(w - i);
+                for (y, lanes) in px.chunks_exact(pw).take(n).enumerate() {
+                    band[y * w + i..y * w + i + cols].copy_from_slice(&lanes[..cols]);
                 }
-            });
-        out
+            }
+        });
+    out
+}
+
+/// Rows `y0 ..` of [`render_f32_rows`]'s colours, returned, and of [`render_aov_rows`]'s
+/// records, written over `records` (whole rows: its length gives the rows), each the same
+/// in every bit as from its own pass. Where the packets shade the scene themselves (no
+/// antialiasing, textures or directional and spot lights), the camera rays are traced
+/// once for both ([`packet::colour_aov_tracer`]); elsewhere the two passes run one after
+/// the other.
+pub fn render_f32_rows_aov(
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    y0: u32,
+    records: &mut [AovOut],
+) -> Vec<[f32; 4]> {
+    let w = buf.params.width as usize;
+    let rows = (records.len() / w.max(1)) as u32;
+    if spec.antialias || spec.textures || spec.light_kinds {
+        records.copy_from_slice(&render_aov_rows(None, buf, spec, y0, rows));
+        return render_f32_rows(buf, spec, y0, rows);
     }
-    match f64_scene {
-        Some(s) => rows_of(&globals_f64(s, buf, spec), y0, rows),
-        None => rows_of(&globals_f32(buf, spec), y0, rows),
-    }
+    let g = packet_globals(buf, spec);
+    let trace = packet::colour_aov_tracer(packet::Simd::Best);
+    let (pw, ph) = (packet::PACKET_W as usize, packet::PACKET_H as usize);
+    let mut colours = vec![[0.0f32; 4]; w * rows as usize];
+    colours
+        .par_chunks_mut((w * ph).max(1))
+        .zip(records.par_chunks_mut((w * ph).max(1)))
+        .enumerate()
+        .for_each(|(b, (colour_band, record_band))| {
+            let j = y0 + (b * ph) as u32;
+            let n = colour_band.len() / w.max(1);
+            for i in (0..w).step_by(pw) {
+                let (px, rec) = trace(&g, i as u32, j);
+                let cols = pw.min(w - i);
+                for y in 0..n {
+                    let (at, lane) = (y * w + i, y * pw);
+                    colour_band[at..at + cols].copy_from_slice(&px[lane..lane + cols]);
+                    record_band[at..at + cols].copy_from_slice(&rec[lane..lane + cols]);
+                }
+            }
+        });
+    colours
+}
+
+/// [`render_aov_rows`] in f32 with the mirror's own `aov_pixel`, one pixel at a time: the
+/// slower twin that the packets are checked against.
+pub fn render_aov_rows_mirror(
+    buf: &SceneBuffers,
+    spec: Specialisation,
+    y0: u32,
+    rows: u32,
+) -> Vec<AovOut> {
+    aov_rows_with(&globals_f32(buf, spec), y0, rows)
+}
+
+/// `aov_pixel` of every pixel of rows `y0 .. y0 + rows`, rows in parallel.
+fn aov_rows_with<R: Real>(g: &Globals<R>, y0: u32, rows: u32) -> Vec<AovOut> {
+    let w = g.cam.width as usize;
+    let mut out: Vec<AovOut> = bytemuck::zeroed_vec(w * rows as usize);
+    out.par_chunks_mut(w.max(1))
+        .enumerate()
+        .for_each(|(r, row)| {
+            let j = y0 + r as u32;
+            for (i, px) in row.iter_mut().enumerate() {
+                *px = aov::aov_pixel(g, i as u32, j);
+            }
+        });
+    out
 }
 
 /// The `query` entry point on the CPU, in f32 (the shader's twin) over many rays.

@@ -213,6 +213,9 @@ struct Run<'j, 'a> {
     cancel: Option<&'j AtomicBool>,
     /// This render's stage times ([`RenderReport::stages`]).
     stages: Stages,
+    /// Where the f32 CPU tracer puts the AOV records it traces with the colour (`None`:
+    /// no AOVs asked for).
+    aov_records: Option<Vec<crate::buffers::AovOut>>,
 }
 
 impl Run<'_, '_> {
@@ -319,6 +322,7 @@ impl<'a> Job<'a> {
             notes: Vec::new(),
             cancel: cancel.as_deref(),
             stages: Stages::new(),
+            aov_records: None,
         };
         let (mut owned, borrowed) = match scene {
             Source::Owned(s) => (Some(s), None),
@@ -373,6 +377,10 @@ impl<'a> Job<'a> {
         let mut sink = Sink::open(&to_sink, w, h, scene.encoding)?;
         let math = options.math_mode();
         let keep_geometry = keep || !aovs.is_empty();
+        if !aovs.is_empty() {
+            // Zeroed lazily (the pages are first touched where the records are written).
+            run.aov_records = Some(bytemuck::zeroed_vec(w as usize * h as usize));
+        }
         let traced = trace(
             renderer,
             scene,
@@ -389,9 +397,16 @@ impl<'a> Job<'a> {
         let mut aov_files = Vec::new();
         if !aovs.is_empty() {
             let spec = Specialisation::for_scene(buf).with_math(math);
-            let t = Instant::now();
-            let pixels = trace_aovs(renderer, traced.tracer, scene, buf, spec)?;
-            run.stages.record("aov", t.elapsed());
+            let pixels = match run.aov_records.take() {
+                // Traced with the colour, from the same camera rays.
+                Some(r) if traced.tracer == TracerKind::CpuF32 => r,
+                _ => {
+                    let t = Instant::now();
+                    let pixels = trace_aovs(renderer, traced.tracer, scene, buf, spec)?;
+                    run.stages.record("aov", t.elapsed());
+                    pixels
+                }
+            };
             let a = AovImage {
                 width: w,
                 height: h,
@@ -607,9 +622,14 @@ fn cpu_bands(
         }
         let rows = rows_per_band.min(h - y);
         let t = Instant::now();
-        let px = match f64_scene {
-            Some(s) => crate::cpu::render_f64_rows(s, buf, spec, y, rows),
-            None => crate::cpu::render_f32_rows(buf, spec, y, rows),
+        let px = match (f64_scene, run.aov_records.as_mut()) {
+            (Some(s), _) => crate::cpu::render_f64_rows(s, buf, spec, y, rows),
+            (None, None) => crate::cpu::render_f32_rows(buf, spec, y, rows),
+            (None, Some(records)) => {
+                let at = y as usize * w as usize;
+                let band = &mut records[at..at + rows as usize * w as usize];
+                crate::cpu::render_f32_rows_aov(buf, spec, y, band)
+            }
         };
         frame += t.elapsed();
         run.stages.time("encode", || sink.write_rows(&px))?;

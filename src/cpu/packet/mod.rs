@@ -25,6 +25,7 @@
 //! `trace.rs` (camera rays, box test, searches, shading), each the twin of the mirror's
 //! file of the same stem; this file picks the build (`trace_packet`).
 
+mod aov;
 mod common;
 mod prims;
 mod trace;
@@ -105,6 +106,97 @@ pub fn trace_packet_mirror(g: &Globals<f32>, i: u32, j: u32) -> [[f32; 4]; LANES
         }
     }
     out
+}
+
+/// The AOVs of a block's pixels, as [`trace_packet`]'s lanes ([`crate::cpu::aov::aov_pixel`]
+/// of each): one build of [`aov_tracer`].
+pub type AovFn = fn(&Globals<f32>, u32, u32) -> [crate::buffers::AovOut; LANES];
+
+/// The AOV packet tracer's build `simd`, chosen once: the centre rays traced as
+/// [`trace_packet`]'s, each hit described by the mirror's `aov_of` (the same records as
+/// the mirror's `aov_pixel`, bit for bit).
+pub fn aov_tracer(simd: Simd) -> AovFn {
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = simd;
+    #[cfg(target_arch = "x86_64")]
+    match simd.name() {
+        // SAFETY: the token's detection said the CPU has AVX-512 F, VL, BW and DQ.
+        "avx512" if Avx512::detect().is_some() => {
+            return |g, i, j| unsafe { aov_packet_avx512(g, i, j) };
+        }
+        // SAFETY: the token's detection said the CPU has AVX2.
+        "avx2" if Avx2::detect().is_some() => {
+            return |g, i, j| unsafe { aov_packet_avx2(g, i, j) };
+        }
+        _ => {}
+    }
+    |g, i, j| aov::aov_packet_body(Portable, g, i, j)
+}
+
+/// The AOV packet compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn aov_packet_avx2(g: &Globals<f32>, i: u32, j: u32) -> [crate::buffers::AovOut; LANES] {
+    // SAFETY: this function is compiled for AVX2 and runs only where the CPU has it.
+    aov::aov_packet_body(unsafe { Avx2::new_unchecked() }, g, i, j)
+}
+
+/// The AOV packet compiled for AVX-512.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+unsafe fn aov_packet_avx512(g: &Globals<f32>, i: u32, j: u32) -> [crate::buffers::AovOut; LANES] {
+    // SAFETY: this function is compiled for AVX-512 F and runs only where the CPU has it.
+    aov::aov_packet_body(unsafe { Avx512::new_unchecked() }, g, i, j)
+}
+
+/// The colours and AOVs of a block's pixels from one traversal: one build of
+/// [`colour_aov_tracer`].
+pub type ColourAovFn =
+    fn(&Globals<f32>, u32, u32) -> ([[f32; 4]; LANES], [crate::buffers::AovOut; LANES]);
+
+/// [`trace_packet`] and [`aov_tracer`]'s packet at once, the hits of the camera rays
+/// traced once (build `simd`). For scenes that [`trace_packet`] shades itself: without
+/// antialiasing, textures or directional and spot lights.
+pub fn colour_aov_tracer(simd: Simd) -> ColourAovFn {
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = simd;
+    #[cfg(target_arch = "x86_64")]
+    match simd.name() {
+        // SAFETY: the token's detection said the CPU has AVX-512 F, VL, BW and DQ.
+        "avx512" if Avx512::detect().is_some() => {
+            return |g, i, j| unsafe { colour_aov_avx512(g, i, j) };
+        }
+        // SAFETY: the token's detection said the CPU has AVX2.
+        "avx2" if Avx2::detect().is_some() => {
+            return |g, i, j| unsafe { colour_aov_avx2(g, i, j) };
+        }
+        _ => {}
+    }
+    |g, i, j| aov::colour_aov_packet_body(Portable, g, i, j)
+}
+
+/// The colour and AOV packet compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn colour_aov_avx2(
+    g: &Globals<f32>,
+    i: u32,
+    j: u32,
+) -> ([[f32; 4]; LANES], [crate::buffers::AovOut; LANES]) {
+    // SAFETY: this function is compiled for AVX2 and runs only where the CPU has it.
+    aov::colour_aov_packet_body(unsafe { Avx2::new_unchecked() }, g, i, j)
+}
+
+/// The colour and AOV packet compiled for AVX-512.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+unsafe fn colour_aov_avx512(
+    g: &Globals<f32>,
+    i: u32,
+    j: u32,
+) -> ([[f32; 4]; LANES], [crate::buffers::AovOut; LANES]) {
+    // SAFETY: this function is compiled for AVX-512 F and runs only where the CPU has it.
+    aov::colour_aov_packet_body(unsafe { Avx512::new_unchecked() }, g, i, j)
 }
 
 /// A packet tracer: [`trace_packet`] of one build.

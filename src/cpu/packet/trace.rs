@@ -663,6 +663,20 @@ pub(super) fn sample_packet<B: Build>(
     dx: f32,
     dy: f32,
 ) -> [[f32; 4]; LANES] {
+    sample_packet_hits::<B>(b, g, i, j, dx, dy).0
+}
+
+/// [`sample_packet`], with the camera rays, their hits and the lanes inside the image,
+/// for a caller that describes the hits further (the AOVs of the same rays).
+#[inline(always)]
+pub(super) fn sample_packet_hits<B: Build>(
+    b: B,
+    g: &Globals<f32>,
+    i: u32,
+    j: u32,
+    dx: f32,
+    dy: f32,
+) -> ([[f32; 4]; LANES], [Ray<f32>; LANES], PacketHits, Mask) {
     let (rays, dir, active) = camera_rays(g, i, j, dx, dy);
     let found = closest_hit_packet::<B>(b, g, &rays, &dir, active, 0.0, f32::MAX);
     let mut hit = [false; LANES];
@@ -683,7 +697,7 @@ pub(super) fn sample_packet<B: Build>(
     if g.spec.whitted {
         super::whitted::secondary_lanes::<B>(b, g, &rays, &found, lit & active, &mut out);
     }
-    out
+    (out, rays, found, active)
 }
 
 /// `shade` for the lanes in `mask`, which must all hit something: the same operations in
