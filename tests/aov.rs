@@ -537,3 +537,39 @@ fn the_command_line_writes_and_compares_aovs() {
     assert!(text.contains("AOV prim_id: 0 differing pixels"), "{text}");
     assert_eq!(code, Some(0), "{text}");
 }
+
+/// docs/aov.md's pictures are what the code writes now: each PNG in `docs/images/aov/`
+/// decodes to the same samples as a render of bb8 at 400×300 with the same AOVs.
+/// Regenerate them with the command docs/aov.md gives. The twin: a picture compared with
+/// another AOV's differs.
+#[test]
+fn the_aov_pictures_in_the_docs_are_current() {
+    let dir = Scratch::new("aov-docs");
+    let scene = seed_scene("bb8");
+    let cpu = Renderer::new(Backend::Cpu).unwrap();
+    let aovs: Vec<Aov> = Aov::ALL
+        .into_iter()
+        .filter(|&a| a != Aov::Position)
+        .collect();
+    let out = dir.join("bb8.png");
+    Job::borrowed(&scene, Output::file(&out).unwrap())
+        .options(RenderOptions {
+            size: Some((400, 300)),
+            aovs: aovs.clone(),
+            ..RenderOptions::default()
+        })
+        .run(&cpu)
+        .unwrap();
+    let docs = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/images/aov/bb8.png");
+    let samples = |p: &std::path::Path| image::open(p).unwrap().into_rgba16().into_raw();
+    assert_eq!(samples(&out), samples(&docs), "the colour");
+    for &a in &aovs {
+        let (now, committed) = (AovImage::png_path(&out, a), AovImage::png_path(&docs, a));
+        assert!(samples(&now) == samples(&committed), "docs/images/aov: {a}");
+    }
+    assert!(
+        samples(&AovImage::png_path(&out, Aov::Depth))
+            != samples(&AovImage::png_path(&docs, Aov::T)),
+        "the twin: depth is not t"
+    );
+}
