@@ -37,13 +37,17 @@ fn wall(z: f32) -> String {
     )
 }
 
+/// The mirror's whole records of a frame, row-major, and the scene's numbering.
+struct Records {
+    pixels: Vec<AovOut>,
+    ids: IdMap,
+}
+
 /// The mirror's AOVs of `scene` at its own size.
-fn cpu_aovs(scene: &Scene) -> AovImage {
+fn cpu_aovs(scene: &Scene) -> Records {
     let (w, h) = scene.size();
     let (buf, spec) = buffers(scene, w, h, scene.triangle);
-    AovImage {
-        width: w,
-        height: h,
+    Records {
         pixels: glint::cpu::render_aov_rows(None, &buf, spec, 0, h),
         ids: IdMap::new(scene),
     }
@@ -51,7 +55,7 @@ fn cpu_aovs(scene: &Scene) -> AovImage {
 
 /// Whether every pixel of `a` sees a plane facing the camera at distance `d`: depth `d`
 /// (to 4 ULP), t ≥ depth, the normal +z.
-fn plane_at(a: &AovImage, d: f32) -> Result<(), String> {
+fn plane_at(a: &Records, d: f32) -> Result<(), String> {
     for (k, p) in a.pixels.iter().enumerate() {
         if (p.depth - d).abs() > 4.0 * f32::EPSILON * d {
             return Err(format!("pixel {k}: depth {} is not {d}", p.depth));
@@ -92,7 +96,7 @@ fn a_plane_facing_the_camera_is_at_its_depth_everywhere() {
 
 /// Whether each hit of `a` lies on the sphere (`c`, `r`) with the normal (p − c) / r (to
 /// 1e-5), and each miss holds the miss values.
-fn sphere_normals(a: &AovImage, c: [f32; 3], r: f32) -> Result<usize, String> {
+fn sphere_normals(a: &Records, c: [f32; 3], r: f32) -> Result<usize, String> {
     let mut hits = 0;
     for (k, p) in a.pixels.iter().enumerate() {
         if p.prim == PRIM_NONE {
@@ -169,8 +173,14 @@ fn overlapping_objects_give_the_nearest_ids() {
     );
 }
 
-/// The AOV frame that `kernel` (the GPU's) makes of `buf`, in tiles of 13 rows.
-fn gpu_aovs(gpu: &glint::gpu::Gpu, scene: &Scene, w: u32, h: u32) -> (AovImage, AovImage, bool) {
+/// The GPU's records of `scene` (in tiles of 13 rows) and the mirror's, and whether the
+/// adapter is expected to be exact.
+fn gpu_aovs(
+    gpu: &glint::gpu::Gpu,
+    scene: &Scene,
+    w: u32,
+    h: u32,
+) -> (Vec<AovOut>, Vec<AovOut>, bool) {
     let (buf, spec) = buffers(scene, w, h, scene.triangle);
     let kernel = gpu.compute_kernel(spec).expect("kernel");
     let mut px = vec![AovOut::default(); (w * h) as usize];
@@ -179,14 +189,8 @@ fn gpu_aovs(gpu: &glint::gpu::Gpu, scene: &Scene, w: u32, h: u32) -> (AovImage, 
             px[(y * w) as usize..(y * w) as usize + band.len()].copy_from_slice(band)
         })
         .expect("GPU AOVs");
-    let frame = |pixels| AovImage {
-        width: w,
-        height: h,
-        pixels,
-        ids: IdMap::new(scene),
-    };
     let cpu = glint::cpu::render_aov_rows(None, &buf, spec, 0, h);
-    (frame(px), frame(cpu), common::bit_exact_expected(gpu))
+    (px, cpu, common::bit_exact_expected(gpu))
 }
 
 /// Every AOV of the GPU equals the mirror's in every bit on the seed scenes and those with
@@ -206,11 +210,11 @@ fn gpu_aovs_equal_the_mirror_in_every_bit() {
         "suzanne-ply",
     ] {
         let scene = seed_scene(name);
-        let (g, c, exact) = gpu_aovs(gpu, &scene, 64, 48);
-        assert!(
-            g.pixels.iter().any(|p| p.prim != PRIM_NONE),
-            "{name}: no hits"
-        );
+        let (w, h) = (64, 48);
+        let (gr, cr, exact) = gpu_aovs(gpu, &scene, w, h);
+        let frame = |r: &[AovOut]| AovImage::from_records(w, h, &Aov::ALL, IdMap::new(&scene), r);
+        let (g, c) = (frame(&gr), frame(&cr));
+        assert!(gr.iter().any(|p| p.prim != PRIM_NONE), "{name}: no hits");
         for aov in Aov::ALL {
             let d = diff_aov(aov, &g, &c);
             if exact {
@@ -219,18 +223,14 @@ fn gpu_aovs_equal_the_mirror_in_every_bit() {
         }
         if exact {
             assert!(
-                bytemuck::cast_slice::<AovOut, u8>(&g.pixels)
-                    == bytemuck::cast_slice::<AovOut, u8>(&c.pixels),
+                bytemuck::cast_slice::<AovOut, u8>(&gr) == bytemuck::cast_slice::<AovOut, u8>(&cr),
                 "{name}: the records' bytes"
             );
         }
-        let mut twin = c.clone();
-        let k = twin
-            .pixels
-            .iter()
-            .position(|p| p.prim != PRIM_NONE)
-            .unwrap();
-        twin.pixels[k].normal[1] = f32::from_bits(twin.pixels[k].normal[1].to_bits() ^ 1);
+        let mut twin = cr.clone();
+        let k = twin.iter().position(|p| p.prim != PRIM_NONE).unwrap();
+        twin[k].normal[1] = f32::from_bits(twin[k].normal[1].to_bits() ^ 1);
+        let twin = frame(&twin);
         assert_eq!(
             diff_aov(Aov::Normal, &c, &twin).differing,
             1,
@@ -269,7 +269,11 @@ fn aov_packets_equal_the_mirror() {
         );
         // Colour and AOVs from one traversal: each as from its own pass.
         let mut records = vec![AovOut::default(); 67 * 45];
-        let colour = glint::cpu::render_f32_rows_aov(&buf, spec, 0, &mut records);
+        let blocks = records
+            .chunks_mut(67 * glint::cpu::packet::PACKET_H as usize)
+            .map(|rows| Whole { width: 67, rows })
+            .collect();
+        let colour = glint::cpu::render_f32_rows_aov(&buf, spec, 0, 45, blocks);
         let alone = glint::cpu::render_f32_rows(&buf, spec, 0, 45);
         assert!(
             bytemuck::cast_slice::<[f32; 4], u8>(&colour)
@@ -279,9 +283,36 @@ fn aov_packets_equal_the_mirror() {
         assert_eq!(records, mirror, "{name}: the AOVs traced with the colour");
         let band = glint::cpu::render_aov_rows(None, &buf, spec, 13, 9);
         assert_eq!(band[..], mirror[13 * 67..22 * 67], "{name}: a band");
+        // Into a frame's planes, in two bands: every AOV as the mirror's records give it.
+        let ids = IdMap::new(&scene);
+        let mut frame = AovImage::new(67, 45, &Aov::ALL, ids.clone());
+        for (y0, rows) in [(0, 13), (13, 32)] {
+            let blocks = frame.blocks(y0, rows, glint::cpu::packet::PACKET_H);
+            glint::cpu::render_f32_rows_aov(&buf, spec, y0, rows, blocks);
+        }
+        let want = AovImage::from_records(67, 45, &Aov::ALL, ids.clone(), &mirror);
+        assert!(
+            frame == want,
+            "{name}: the AOVs' planes traced with the colour"
+        );
         let mut twin = mirror.clone();
         twin[0].t = f32::from_bits(twin[0].t.to_bits() ^ 1);
         assert_ne!(packets, twin, "{name}: the twin");
+        let twin = AovImage::from_records(67, 45, &Aov::ALL, ids, &twin);
+        assert!(frame != twin, "{name}: the planes' twin");
+    }
+}
+
+/// Whole records of a block of rows, `width` a row: the records as the tracer gives them.
+struct Whole<'a> {
+    width: usize,
+    rows: &'a mut [AovOut],
+}
+
+impl glint::cpu::RecordRows for Whole<'_> {
+    fn put(&mut self, row: usize, x: usize, records: &[AovOut]) {
+        let at = row * self.width + x;
+        self.rows[at..at + records.len()].copy_from_slice(records);
     }
 }
 
@@ -327,7 +358,12 @@ fn asking_for_aovs_leaves_the_colour_unchanged() {
     let mut moved = scene.clone();
     moved.camera.eye[0] += 0.5;
     let other = job(&moved, Output::Memory, &[Aov::Depth], &renderers[0]);
-    assert_ne!(other.aovs.unwrap().pixels, frames[0].pixels, "the twin");
+    let other = other.aovs.unwrap();
+    assert_eq!(other.aovs(), [Aov::Depth]);
+    assert!(
+        diff_aov(Aov::Depth, &other, &frames[0]).differing > 0,
+        "the twin"
+    );
 }
 
 /// An EXR with AOVs holds R, G, B, A and each AOV's channels, sorted by name, every value
@@ -371,7 +407,7 @@ fn an_exr_holds_the_colour_and_each_aov_exactly() {
     };
     let bits = |aov: Aov, k: usize| match &a.channels(aov)[k].1 {
         glint::image::ChannelData::F32(v) => v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
-        glint::image::ChannelData::U32(v) => v.clone(),
+        glint::image::ChannelData::U32(v) => v.to_vec(),
     };
     assert!(matches!(
         layer
@@ -412,15 +448,17 @@ fn png_aovs_are_written_beside_the_colour() {
         dir.join("out.normal.png")
     );
     let normal = image::open(dir.join("out.normal.png")).unwrap().into_rgb8();
-    let k = a.pixels.iter().position(|p| p.prim != PRIM_NONE).unwrap();
+    let pixels = (a.width * a.height) as usize;
+    let prim = |k: usize| a.bits(Aov::PrimId, 0, k).unwrap();
+    let k = (0..pixels).position(|k| prim(k) != PRIM_NONE).unwrap();
     let (x, y) = (k as u32 % 48, k as u32 / 48);
-    let n = a.pixels[k].normal;
+    let n: [f32; 3] = std::array::from_fn(|c| f32::from_bits(a.bits(Aov::Normal, c, k).unwrap()));
     let want = n.map(|v| glint::image::to_u8(v * 0.5 + 0.5));
     assert_eq!(normal.get_pixel(x, y).0, want);
     let ids = image::open(dir.join("out.prim_id.png"))
         .unwrap()
         .into_rgb8();
-    let id = a.ids.prim_id(a.pixels[k].prim) + 1;
+    let id = prim(k) + 1;
     assert_eq!(
         ids.get_pixel(x, y).0,
         [id as u8, (id >> 8) as u8, (id >> 16) as u8]
@@ -439,12 +477,9 @@ fn png_aovs_are_written_beside_the_colour() {
         .iter()
         .map(|t| (t.keyword.clone(), t.text.clone()))
         .collect();
-    let hits: Vec<(usize, f32)> = a
-        .pixels
-        .iter()
-        .enumerate()
-        .filter(|(_, p)| p.prim != PRIM_NONE)
-        .map(|(k, p)| (k, p.depth))
+    let hits: Vec<(usize, f32)> = (0..pixels)
+        .filter(|&k| prim(k) != PRIM_NONE)
+        .map(|k| (k, f32::from_bits(a.bits(Aov::Depth, 0, k).unwrap())))
         .collect();
     let near = hits.iter().min_by(|x, y| x.1.total_cmp(&y.1)).unwrap();
     let far = hits.iter().max_by(|x, y| x.1.total_cmp(&y.1)).unwrap();
@@ -457,7 +492,7 @@ fn png_aovs_are_written_beside_the_colour() {
     );
     let at = |k: usize| depth.get_pixel(k as u32 % 48, k as u32 / 48).0[0];
     assert_eq!((at(near.0), at(far.0)), (65535, 1));
-    let miss = a.pixels.iter().position(|p| p.prim == PRIM_NONE).unwrap();
+    let miss = (0..pixels).position(|k| prim(k) == PRIM_NONE).unwrap();
     assert_eq!(at(miss), 0);
 
     let refused = dir.join("refused.png");

@@ -365,33 +365,49 @@ pub fn render_aov_rows(
     out
 }
 
-/// Rows `y0 ..` of [`render_f32_rows`]'s colours, returned, and of [`render_aov_rows`]'s
-/// records, written over `records` (whole rows: its length gives the rows), each the same
-/// in every bit as from its own pass. Where the packets shade the scene themselves (no
+/// Where the CPU tracer puts a band's AOV records: a block of whole rows that one thread
+/// writes, [`packet::PACKET_H`] rows of it at a time (`render_f32_rows_aov`'s blocks).
+/// What it keeps of a record (the AOVs asked for, as planes) is its own choice.
+pub trait RecordRows: Send {
+    /// Takes `records`, the pixels `x ..` of row `row` of the block (0 its first row).
+    fn put(&mut self, row: usize, x: usize, records: &[AovOut]);
+}
+
+/// Rows `y0 .. y0 + rows` of [`render_f32_rows`]'s colours, returned, and of
+/// [`render_aov_rows`]'s records, given to `blocks` (block `b` takes rows
+/// `y0 + b·PACKET_H ..`, [`packet::PACKET_H`] rows, fewer in the last), each the same in
+/// every bit as from its own pass. Where the packets shade the scene themselves (no
 /// antialiasing, textures or directional and spot lights), the camera rays are traced
 /// once for both ([`packet::colour_aov_tracer`]); elsewhere the two passes run one after
 /// the other.
-pub fn render_f32_rows_aov(
+pub fn render_f32_rows_aov<S: RecordRows>(
     buf: &SceneBuffers,
     spec: Specialisation,
     y0: u32,
-    records: &mut [AovOut],
+    rows: u32,
+    blocks: Vec<S>,
 ) -> Vec<[f32; 4]> {
     let w = buf.params.width as usize;
-    let rows = (records.len() / w.max(1)) as u32;
+    let ph = packet::PACKET_H as usize;
+    debug_assert_eq!(blocks.len(), (rows as usize).div_ceil(ph));
     if spec.antialias || spec.textures || spec.light_kinds {
-        records.copy_from_slice(&render_aov_rows(None, buf, spec, y0, rows));
+        let records = render_aov_rows(None, buf, spec, y0, rows);
+        for (b, mut block) in blocks.into_iter().enumerate() {
+            for (r, row) in records[b * ph * w..].chunks(w.max(1)).take(ph).enumerate() {
+                block.put(r, 0, row);
+            }
+        }
         return render_f32_rows(buf, spec, y0, rows);
     }
     let g = packet_globals(buf, spec);
     let trace = packet::colour_aov_tracer(packet::Simd::Best);
-    let (pw, ph) = (packet::PACKET_W as usize, packet::PACKET_H as usize);
+    let pw = packet::PACKET_W as usize;
     let mut colours = vec![[0.0f32; 4]; w * rows as usize];
     colours
         .par_chunks_mut((w * ph).max(1))
-        .zip(records.par_chunks_mut((w * ph).max(1)))
+        .zip(blocks.into_par_iter())
         .enumerate()
-        .for_each(|(b, (colour_band, record_band))| {
+        .for_each(|(b, (colour_band, mut block))| {
             let j = y0 + (b * ph) as u32;
             let n = colour_band.len() / w.max(1);
             for i in (0..w).step_by(pw) {
@@ -400,7 +416,7 @@ pub fn render_f32_rows_aov(
                 for y in 0..n {
                     let (at, lane) = (y * w + i, y * pw);
                     colour_band[at..at + cols].copy_from_slice(&px[lane..lane + cols]);
-                    record_band[at..at + cols].copy_from_slice(&rec[lane..lane + cols]);
+                    block.put(y, i, &rec[lane..lane + cols]);
                 }
             }
         });

@@ -174,16 +174,17 @@ impl ExrStream {
     }
 }
 
-/// The values of one channel of [`write_channels`], one a pixel, row-major.
+/// The values of one channel of [`write_channels`], one a pixel, row-major: owned, or
+/// borrowed from a frame that holds them.
 #[derive(Clone, Debug, PartialEq)]
-pub enum ChannelData {
+pub enum ChannelData<'a> {
     /// 32-bit floats, stored exactly.
-    F32(Vec<f32>),
+    F32(std::borrow::Cow<'a, [f32]>),
     /// 32-bit unsigned integers (OpenEXR's UINT), stored exactly.
-    U32(Vec<u32>),
+    U32(std::borrow::Cow<'a, [u32]>),
 }
 
-impl ChannelData {
+impl ChannelData<'_> {
     fn len(&self) -> usize {
         match self {
             ChannelData::F32(v) => v.len(),
@@ -193,9 +194,14 @@ impl ChannelData {
 
     /// The little-endian bytes of pixels `range`.
     fn extend_row(&self, out: &mut Vec<u8>, range: std::ops::Range<usize>) {
-        match self {
-            ChannelData::F32(v) => v[range].iter().for_each(|x| out.extend(x.to_le_bytes())),
-            ChannelData::U32(v) => v[range].iter().for_each(|x| out.extend(x.to_le_bytes())),
+        let words: &[u32] = match self {
+            ChannelData::F32(v) => bytemuck::cast_slice(&v[range]),
+            ChannelData::U32(v) => &v[range],
+        };
+        if cfg!(target_endian = "little") {
+            out.extend_from_slice(bytemuck::cast_slice(words));
+        } else {
+            words.iter().for_each(|x| out.extend(x.to_le_bytes()));
         }
     }
 }
@@ -208,12 +214,12 @@ pub fn write_channels(
     path: &Path,
     width: u32,
     height: u32,
-    channels: &[(String, ChannelData)],
+    channels: &[(String, ChannelData<'_>)],
 ) -> Result<(), ImageError> {
     if format_of(path)? != Format::Exr {
         return Err(ImageError::Extension(path.to_owned()));
     }
-    let mut sorted: Vec<&(String, ChannelData)> = channels.iter().collect();
+    let mut sorted: Vec<&(String, ChannelData<'_>)> = channels.iter().collect();
     sorted.sort_by(|a, b| a.0.as_bytes().cmp(b.0.as_bytes()));
     let pixels = width as usize * height as usize;
     let other = |m: String| ImageError::Io {

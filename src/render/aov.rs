@@ -212,41 +212,181 @@ impl IdMap {
     }
 }
 
-/// A frame of AOVs, row-major, top row first.
+/// A frame of AOVs, row-major, top row first: the AOVs asked for, each as planes of its
+/// channels (one a component), so a frame holds only what was asked (depth, normal and
+/// three ids: 28 bytes a pixel, where the shader's whole record is 64). The planes share
+/// one block of memory, whose pages are first touched where the tracer writes them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AovImage {
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Each pixel's record, as the tracer wrote it (`prim` is the shader's id: see
-    /// [`AovImage::ids`]).
-    pub pixels: Vec<AovOut>,
+    /// The AOVs held, each once, in the order asked.
+    aovs: Vec<Aov>,
+    /// Every channel's plane, one after the other in `aovs`' order; a float's bits or an
+    /// id (numbered by [`AovImage::ids`]).
+    data: Vec<u32>,
     /// The numbering of the scene's primitives and objects.
     pub ids: IdMap,
 }
 
+/// Fills `out` with `f` of each record.
+#[inline(always)]
+fn fill(out: &mut [u32], records: &[AovOut], f: impl Fn(&AovOut) -> u32) {
+    for (o, r) in out.iter_mut().zip(records) {
+        *o = f(r);
+    }
+}
+
+/// A block of whole rows of an [`AovImage`], written by one thread: what the CPU tracer
+/// gives its records to ([`crate::cpu::RecordRows`]), keeping the AOVs asked for.
+pub struct AovRows<'a> {
+    width: usize,
+    ids: &'a IdMap,
+    /// Each channel's rows: the AOV, its component, the plane's part.
+    planes: Vec<(Aov, usize, &'a mut [u32])>,
+}
+
+impl crate::cpu::RecordRows for AovRows<'_> {
+    fn put(&mut self, row: usize, x: usize, records: &[AovOut]) {
+        let at = row * self.width + x;
+        let ids = self.ids;
+        for (aov, c, plane) in &mut self.planes {
+            let (out, c) = (&mut plane[at..at + records.len()], *c);
+            match aov {
+                Aov::T => fill(out, records, |r| r.t.to_bits()),
+                Aov::Depth => fill(out, records, |r| r.depth.to_bits()),
+                Aov::Position => fill(out, records, |r| r.position[c].to_bits()),
+                Aov::GeoNormal => fill(out, records, |r| r.geo_normal[c].to_bits()),
+                Aov::Normal => fill(out, records, |r| r.normal[c].to_bits()),
+                Aov::Albedo => fill(out, records, |r| r.albedo[c].to_bits()),
+                Aov::PrimId => fill(out, records, |r| ids.prim_id(r.prim)),
+                Aov::ObjectId => fill(out, records, |r| ids.object_id(r.prim)),
+                Aov::MaterialId => fill(out, records, |r| r.material),
+                Aov::Mask => fill(out, records, |r| {
+                    (if r.prim == PRIM_NONE { 0.0f32 } else { 1.0 }).to_bits()
+                }),
+            }
+        }
+    }
+}
+
 impl AovImage {
-    /// The values of `aov` at every pixel: one `F32` channel a component, or one `U32`
-    /// channel for an id; named as in an EXR.
-    pub fn channels(&self, aov: Aov) -> Vec<(String, ChannelData)> {
-        let f =
-            |get: &dyn Fn(&AovOut) -> f32| ChannelData::F32(self.pixels.iter().map(get).collect());
-        let u =
-            |get: &dyn Fn(&AovOut) -> u32| ChannelData::U32(self.pixels.iter().map(get).collect());
-        let data: Vec<ChannelData> = match aov {
-            Aov::T => vec![f(&|p| p.t)],
-            Aov::Depth => vec![f(&|p| p.depth)],
-            Aov::Position => (0..3).map(|c| f(&|p| p.position[c])).collect(),
-            Aov::GeoNormal => (0..3).map(|c| f(&|p| p.geo_normal[c])).collect(),
-            Aov::Normal => (0..3).map(|c| f(&|p| p.normal[c])).collect(),
-            Aov::Albedo => (0..3).map(|c| f(&|p| p.albedo[c])).collect(),
-            Aov::PrimId => vec![u(&|p| self.ids.prim_id(p.prim))],
-            Aov::ObjectId => vec![u(&|p| self.ids.object_id(p.prim))],
-            Aov::MaterialId => vec![u(&|p| p.material)],
-            Aov::Mask => vec![f(&|p| if p.prim == PRIM_NONE { 0.0 } else { 1.0 })],
-        };
-        aov.channel_names().into_iter().zip(data).collect()
+    /// A `width`×`height` frame of `aovs` (each once, as asked), every value zero until
+    /// written.
+    pub fn new(width: u32, height: u32, aovs: &[Aov], ids: IdMap) -> AovImage {
+        let mut held: Vec<Aov> = Vec::new();
+        for &a in aovs {
+            if !held.contains(&a) {
+                held.push(a);
+            }
+        }
+        let channels: usize = held.iter().map(|a| a.components().len().max(1)).sum();
+        AovImage {
+            width,
+            height,
+            data: bytemuck::zeroed_vec(channels * width as usize * height as usize),
+            aovs: held,
+            ids,
+        }
+    }
+
+    /// The frame of `aovs` that the records `records` (whole rows, as the shader writes
+    /// them) describe.
+    pub fn from_records(
+        width: u32,
+        height: u32,
+        aovs: &[Aov],
+        ids: IdMap,
+        records: &[AovOut],
+    ) -> AovImage {
+        let mut a = AovImage::new(width, height, aovs, ids);
+        a.put_rows(0, records);
+        a
+    }
+
+    /// Writes `records`, whole rows from row `y0`.
+    pub fn put_rows(&mut self, y0: u32, records: &[AovOut]) {
+        use crate::cpu::RecordRows;
+        let w = (self.width as usize).max(1);
+        let rows = (records.len() / w) as u32;
+        if let Some(block) = self.blocks(y0, rows, rows).first_mut() {
+            for (k, line) in records.chunks(w).enumerate() {
+                block.put(k, 0, line);
+            }
+        }
+    }
+
+    /// Rows `y0 .. y0 + rows` as blocks of `block` rows (fewer in the last), each written
+    /// by one thread: what [`crate::cpu::render_f32_rows_aov`] takes.
+    pub fn blocks(&mut self, y0: u32, rows: u32, block: u32) -> Vec<AovRows<'_>> {
+        let w = self.width as usize;
+        let n = w * self.height as usize;
+        let (start, len) = (y0 as usize * w, rows as usize * w);
+        let step = (block as usize * w).max(1);
+        let count = (rows as usize).div_ceil(block.max(1) as usize);
+        let mut out: Vec<AovRows<'_>> = (0..count)
+            .map(|_| AovRows {
+                width: w,
+                ids: &self.ids,
+                planes: Vec::new(),
+            })
+            .collect();
+        let channels = self
+            .aovs
+            .iter()
+            .flat_map(|&a| (0..a.components().len().max(1)).map(move |c| (a, c)));
+        for ((aov, c), plane) in channels.zip(self.data.chunks_mut(n.max(1))) {
+            for (b, part) in plane[start..start + len].chunks_mut(step).enumerate() {
+                out[b].planes.push((aov, c, part));
+            }
+        }
+        out
+    }
+
+    /// The AOVs held, in the order asked.
+    pub fn aovs(&self) -> &[Aov] {
+        &self.aovs
+    }
+
+    /// Component `c` of `aov` (0 for a scalar), one value a pixel: `F32`, or `U32` for an
+    /// id; `None` where the frame does not hold `aov`.
+    pub fn channel(&self, aov: Aov, c: usize) -> Option<ChannelData<'_>> {
+        let n = self.width as usize * self.height as usize;
+        let mut first = 0;
+        for &a in &self.aovs {
+            let k = a.components().len().max(1);
+            if a == aov {
+                let plane = self.data.get((first + c) * n..(first + c + 1) * n)?;
+                return Some(match a.is_id() {
+                    true => ChannelData::U32(plane.into()),
+                    false => ChannelData::F32(bytemuck::cast_slice::<u32, f32>(plane).into()),
+                });
+            }
+            first += k;
+        }
+        None
+    }
+
+    /// Component `c` of `aov` at pixel `k` (row-major), as the bits of its channel's type;
+    /// `None` where the frame does not hold `aov`.
+    pub fn bits(&self, aov: Aov, c: usize, k: usize) -> Option<u32> {
+        Some(match self.channel(aov, c)? {
+            ChannelData::F32(v) => v.get(k)?.to_bits(),
+            ChannelData::U32(v) => *v.get(k)?,
+        })
+    }
+
+    /// The values of `aov` at every pixel, named as in an EXR: one `F32` channel a
+    /// component, or one `U32` channel for an id. Empty where the frame does not hold
+    /// `aov`.
+    pub fn channels(&self, aov: Aov) -> Vec<(String, ChannelData<'_>)> {
+        aov.channel_names()
+            .into_iter()
+            .enumerate()
+            .filter_map(|(c, name)| Some((name, self.channel(aov, c)?)))
+            .collect()
     }
 
     /// Where `aov`'s PNG goes beside the colour's `colour` (`out.png`: `out.normal.png`).
@@ -267,41 +407,33 @@ impl AovImage {
     }
 
     /// The colour's `[r, g, b, t]` pixels as the EXR channels `R`, `G`, `B` and `A`, then
-    /// each AOV of `aovs` ([`AovImage::channels`]): what [`crate::image::write_channels`]
+    /// each AOV's channels ([`AovImage::channels`]): what [`crate::image::write_channels`]
     /// writes for a render with AOVs to an EXR.
-    pub fn with_colour(
-        &self,
-        colour: &crate::image::Image,
-        aovs: &[Aov],
-    ) -> Vec<(String, ChannelData)> {
-        let mut out: Vec<(String, ChannelData)> = ["R", "G", "B", "A"]
+    pub fn with_colour(&self, colour: &crate::image::Image) -> Vec<(String, ChannelData<'_>)> {
+        let mut out: Vec<(String, ChannelData<'_>)> = ["R", "G", "B", "A"]
             .iter()
             .enumerate()
             .map(|(c, name)| {
-                let v = colour.pixels.iter().map(|p| p[c]).collect();
-                (name.to_string(), ChannelData::F32(v))
+                let v: Vec<f32> = colour.pixels.iter().map(|p| p[c]).collect();
+                (name.to_string(), ChannelData::F32(v.into()))
             })
             .collect();
-        for &a in aovs {
+        for &a in &self.aovs {
             out.extend(self.channels(a));
         }
         out
     }
 
-    /// Writes each AOV of `aovs` to its PNG beside `colour` ([`AovImage::png_path`]), each
+    /// Writes each AOV of the frame to its PNG beside `colour` ([`AovImage::png_path`]), each
     /// atomically, as docs/aov.md maps it: `t` and `depth` 16-bit grey, linear from 65535
     /// at the frame's nearest hit to 1 at its farthest (their values in the file's
     /// `glint:min` and `glint:max` text chunks), 0 on a miss; normals 8-bit RGB of (n + 1) / 2, black on a miss; `albedo` 8-bit RGB; ids
     /// 8-bit RGB of id + 1 (red the lowest byte; 0 on a miss); `mask` 8-bit grey, 255 on
     /// a hit. Returns the files written.
-    pub fn write_pngs(
-        &self,
-        colour: &Path,
-        aovs: &[Aov],
-    ) -> Result<Vec<PathBuf>, super::RenderError> {
-        AovImage::check_png(colour, aovs)?;
+    pub fn write_pngs(&self, colour: &Path) -> Result<Vec<PathBuf>, super::RenderError> {
+        AovImage::check_png(colour, &self.aovs)?;
         let mut written = Vec::new();
-        for &aov in aovs {
+        for &aov in &self.aovs {
             let path = AovImage::png_path(colour, aov);
             let (bytes, color, depth, text) = self.png_bytes(aov, &path)?;
             let (w, h) = (self.width, self.height);
@@ -329,29 +461,39 @@ impl AovImage {
         AovError,
     > {
         use png::{BitDepth, ColorType};
-        let hit = |p: &AovOut| p.prim != PRIM_NONE;
         let unit = |x: f32| crate::image::to_u8(x);
+        if !self.aovs.contains(&aov) {
+            return Ok((
+                Vec::new(),
+                ColorType::Grayscale,
+                BitDepth::Eight,
+                Vec::new(),
+            ));
+        }
+        let f32s = |c: usize| match self.channel(aov, c) {
+            Some(ChannelData::F32(v)) => v,
+            _ => unreachable!("{aov} is a float AOV the frame holds"),
+        };
         Ok(match aov {
             Aov::T | Aov::Depth => {
-                let value = |p: &AovOut| if aov == Aov::T { p.t } else { p.depth };
-                let (lo, hi) = self
-                    .pixels
+                // A miss holds −1; a hit's distance and depth are never negative.
+                let values = f32s(0);
+                let hit = |v: f32| v >= 0.0;
+                let (lo, hi) = values
                     .iter()
-                    .filter(|p| hit(p))
-                    .map(value)
+                    .copied()
+                    .filter(|&v| hit(v))
                     .fold((f32::INFINITY, 0.0f32), |(lo, hi), v| {
                         (if v < lo { v } else { lo }, if v > hi { v } else { hi })
                     });
                 let span = hi - lo;
-                let bytes = self
-                    .pixels
+                let bytes = values
                     .iter()
-                    .flat_map(|p| {
-                        let q = match hit(p) {
+                    .flat_map(|&v| {
+                        let q = match hit(v) {
                             false => 0,
                             true if span > 0.0 => {
-                                1 + (((hi - value(p)) / span).clamp(0.0, 1.0) * 65534.0).round()
-                                    as u16
+                                1 + (((hi - v) / span).clamp(0.0, 1.0) * 65534.0).round() as u16
                             }
                             true => 65535,
                         };
@@ -365,38 +507,29 @@ impl AovImage {
                 (bytes, ColorType::Grayscale, BitDepth::Sixteen, text)
             }
             Aov::GeoNormal | Aov::Normal => {
-                let n = |p: &AovOut| {
-                    if aov == Aov::Normal {
-                        p.normal
-                    } else {
-                        p.geo_normal
-                    }
-                };
-                let bytes = self
-                    .pixels
-                    .iter()
-                    .flat_map(|p| match hit(p) {
-                        true => n(p).map(|x| unit(x * 0.5 + 0.5)),
-                        false => [0; 3],
+                // A miss holds the zero vector; a hit's normal is a unit vector.
+                let (x, y, z) = (f32s(0), f32s(1), f32s(2));
+                let bytes = (0..x.len())
+                    .flat_map(|k| match [x[k], y[k], z[k]] {
+                        [0.0, 0.0, 0.0] => [0; 3],
+                        n => n.map(|v| unit(v * 0.5 + 0.5)),
                     })
                     .collect();
                 (bytes, ColorType::Rgb, BitDepth::Eight, Vec::new())
             }
             Aov::Albedo => {
-                let bytes = self
-                    .pixels
-                    .iter()
-                    .flat_map(|p| p.albedo.map(unit))
+                let (r, g, b) = (f32s(0), f32s(1), f32s(2));
+                let bytes = (0..r.len())
+                    .flat_map(|k| [r[k], g[k], b[k]].map(unit))
                     .collect();
                 (bytes, ColorType::Rgb, BitDepth::Eight, Vec::new())
             }
             Aov::PrimId | Aov::ObjectId | Aov::MaterialId => {
-                let (_, data) = self.channels(aov).remove(0);
-                let ChannelData::U32(ids) = data else {
+                let Some(ChannelData::U32(ids)) = self.channel(aov, 0) else {
                     unreachable!("ids are u32 channels")
                 };
                 let mut bytes = Vec::with_capacity(ids.len() * 3);
-                for id in ids {
+                for &id in ids.iter() {
                     let v = id.wrapping_add(1);
                     if v >= 1 << 24 {
                         return Err(AovError::IdTooLarge {
@@ -410,10 +543,9 @@ impl AovImage {
                 (bytes, ColorType::Rgb, BitDepth::Eight, Vec::new())
             }
             Aov::Mask => {
-                let bytes = self
-                    .pixels
+                let bytes = f32s(0)
                     .iter()
-                    .map(|p| if hit(p) { 255 } else { 0 })
+                    .map(|&m| if m > 0.0 { 255 } else { 0 })
                     .collect();
                 (bytes, ColorType::Grayscale, BitDepth::Eight, Vec::new())
             }

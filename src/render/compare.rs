@@ -12,7 +12,6 @@ use super::renderer::{RenderError, RenderOptions};
 use crate::buffers::{SceneBuffers, Specialisation};
 use crate::compare::{Diff, diff, diff_image};
 use crate::gpu::{Gpu, GpuError};
-use crate::image::ChannelData;
 use crate::image::Image;
 use crate::scene::{Scene, TriangleAlgorithm};
 
@@ -74,27 +73,26 @@ pub struct AovDiff {
     pub first: Option<(u32, u32)>,
 }
 
-/// Where `aov` of `a` and of `b` (frames of `width` pixels a row) differ in some bit.
+/// Where `aov` of `a` and of `b` (frames of `width` pixels a row) differ in some bit; a
+/// frame that does not hold `aov`, or holds fewer pixels, differs at every pixel it lacks.
 pub fn diff_aov(aov: Aov, a: &AovImage, b: &AovImage) -> AovDiff {
-    let (ca, cb) = (a.channels(aov), b.channels(aov));
+    let pixels = |f: &AovImage| f.width as usize * f.height as usize;
+    let (na, nb) = (pixels(a), pixels(b));
+    let components = aov.channel_names().len();
     let mut out = AovDiff::default();
-    let bits = |d: &ChannelData, k: usize| match d {
-        ChannelData::F32(v) => v[k].to_bits(),
-        ChannelData::U32(v) => v[k],
-    };
-    for k in 0..a.pixels.len().min(b.pixels.len()) {
-        if ca
-            .iter()
-            .zip(&cb)
-            .any(|((_, x), (_, y))| bits(x, k) != bits(y, k))
-        {
+    for k in 0..na.max(nb) {
+        let same = k < na.min(nb)
+            && (0..components).all(|c| match (a.bits(aov, c, k), b.bits(aov, c, k)) {
+                (Some(x), Some(y)) => x == y,
+                _ => false,
+            });
+        if !same {
             out.differing += 1;
             if out.first.is_none() {
                 out.first = Some((k as u32 % a.width.max(1), k as u32 / a.width.max(1)));
             }
         }
     }
-    out.differing += a.pixels.len().abs_diff(b.pixels.len());
     out
 }
 
@@ -146,14 +144,10 @@ pub fn compare(
             u32::MAX,
             &mut |_, px| on_gpu.extend_from_slice(px),
         )?;
-        let frame = |pixels| AovImage {
-            width: w,
-            height: h,
-            pixels,
-            ids: IdMap::new(scene),
-        };
-        let g = frame(on_gpu);
-        let c = frame(crate::cpu::render_aov_rows(None, &buf, spec, 0, h));
+        let frame =
+            |records: &[_]| AovImage::from_records(w, h, &options.aovs, IdMap::new(scene), records);
+        let g = frame(&on_gpu);
+        let c = frame(&crate::cpu::render_aov_rows(None, &buf, spec, 0, h));
         aovs = options
             .aovs
             .iter()

@@ -213,9 +213,9 @@ struct Run<'j, 'a> {
     cancel: Option<&'j AtomicBool>,
     /// This render's stage times ([`RenderReport::stages`]).
     stages: Stages,
-    /// Where the f32 CPU tracer puts the AOV records it traces with the colour (`None`:
+    /// The frame's AOVs, which the f32 CPU tracer writes as it traces the colour (`None`:
     /// no AOVs asked for).
-    aov_records: Option<Vec<crate::buffers::AovOut>>,
+    aov_frame: Option<AovImage>,
 }
 
 impl Run<'_, '_> {
@@ -322,7 +322,7 @@ impl<'a> Job<'a> {
             notes: Vec::new(),
             cancel: cancel.as_deref(),
             stages: Stages::new(),
-            aov_records: None,
+            aov_frame: None,
         };
         let (mut owned, borrowed) = match scene {
             Source::Owned(s) => (Some(s), None),
@@ -378,8 +378,7 @@ impl<'a> Job<'a> {
         let math = options.math_mode();
         let keep_geometry = keep || !aovs.is_empty();
         if !aovs.is_empty() {
-            // Zeroed lazily (the pages are first touched where the records are written).
-            run.aov_records = Some(bytemuck::zeroed_vec(w as usize * h as usize));
+            run.aov_frame = Some(AovImage::new(w, h, &aovs, IdMap::new(scene)));
         }
         let traced = trace(
             renderer,
@@ -395,36 +394,29 @@ impl<'a> Job<'a> {
         }
         let mut aov_image = None;
         let mut aov_files = Vec::new();
-        if !aovs.is_empty() {
-            let spec = Specialisation::for_scene(buf).with_math(math);
-            let pixels = match run.aov_records.take() {
-                // Traced with the colour, from the same camera rays.
-                Some(r) if traced.tracer == TracerKind::CpuF32 => r,
-                _ => {
-                    let t = Instant::now();
-                    let pixels = trace_aovs(renderer, traced.tracer, scene, buf, spec)?;
-                    run.stages.record("aov", t.elapsed());
-                    pixels
-                }
-            };
-            let a = AovImage {
-                width: w,
-                height: h,
-                pixels,
-                ids: IdMap::new(scene),
-            };
+        if let Some(mut a) = run.aov_frame.take() {
+            // The f32 CPU tracer wrote them with the colour, from the same camera rays.
+            if traced.tracer != TracerKind::CpuF32 {
+                let spec = Specialisation::for_scene(buf).with_math(math);
+                let t = Instant::now();
+                trace_aovs(renderer, traced.tracer, scene, buf, spec, &mut a)?;
+                run.stages.record("aov", t.elapsed());
+            }
             // The AOVs' files first: the colour's, renamed into place last, marks the
             // frame done (`render --frames --resume`).
             if let Output::Png(p) = &output {
                 let t = Instant::now();
-                aov_files = a.write_pngs(p, &aovs)?;
+                aov_files = a.write_pngs(p)?;
                 run.stages.record("write", t.elapsed());
             }
             aov_image = Some(a);
         }
         let mut image = run.stages.time("write", || sink.finish())?;
-        if let (Output::Exr(p), Some(a), Some(colour)) = (&output, &aov_image, &image) {
-            let channels = a.with_colour(colour, &aovs);
+        if let Output::Exr(p) = &output
+            && let Some(colour) = &image
+            && let Some(a) = aov_image.take()
+        {
+            let channels = a.with_colour(colour);
             run.stages
                 .time("write", || crate::image::write_channels(p, w, h, &channels))?;
             image = None;
@@ -506,22 +498,24 @@ fn check_aov_output(output: &Output, aovs: &[Aov], w: u32, h: u32) -> Result<(),
             crate::image::check_writable(&AovImage::png_path(p, a))?;
         }
     }
-    // The records, the colour held whole, and an EXR's channels (at most 26 of 4 bytes).
-    let per_pixel = size_of::<crate::buffers::AovOut>() as u64 + 16 + 26 * 4;
+    // The AOVs' planes (4 bytes a channel), the colour held whole, and an EXR's copy of
+    // its channels R, G, B, A.
+    let channels: usize = aovs.iter().map(|a| a.channel_names().len()).sum();
+    let per_pixel = 4 * channels as u64 + 16 + 16;
     super::check_memory(w, h, w as u64 * h as u64 * per_pixel)?;
     Ok(())
 }
 
 /// The frame's AOVs on the tracer that made its colour (`tracer`: the CPU's after `auto`'s
-/// fallback), all at once.
+/// fallback), written into `frame`: the GPU's band by band, the CPU's all at once.
 fn trace_aovs(
     renderer: &Renderer,
     tracer: TracerKind,
     scene: &Scene,
     buf: &SceneBuffers,
     spec: Specialisation,
-) -> Result<Vec<crate::buffers::AovOut>, RenderError> {
-    let (w, h) = (buf.params.width, buf.params.height);
+    frame: &mut AovImage,
+) -> Result<(), RenderError> {
     let gpu = match renderer.tracer() {
         Tracer::Gpu(g) | Tracer::GpuRq(g) => Some(g),
         _ => None,
@@ -533,18 +527,19 @@ fn trace_aovs(
     };
     let Some((gpu, kernel)) = kernel else {
         let f64_scene = (tracer == TracerKind::CpuF64).then_some(scene);
-        return Ok(crate::cpu::render_aov_rows(f64_scene, buf, spec, 0, h));
+        let h = buf.params.height;
+        frame.put_rows(0, &crate::cpu::render_aov_rows(f64_scene, buf, spec, 0, h));
+        return Ok(());
     };
-    let mut out = Vec::with_capacity(w as usize * h as usize);
     kernel.render_aov_bands(
         &gpu.device,
         &gpu.queue,
         buf,
         spec,
         u32::MAX,
-        &mut |_, px| out.extend_from_slice(px),
+        &mut |y, px| frame.put_rows(y, px),
     )?;
-    Ok(out)
+    Ok(())
 }
 
 /// What [`trace`] did.
@@ -622,13 +617,12 @@ fn cpu_bands(
         }
         let rows = rows_per_band.min(h - y);
         let t = Instant::now();
-        let px = match (f64_scene, run.aov_records.as_mut()) {
+        let px = match (f64_scene, run.aov_frame.as_mut()) {
             (Some(s), _) => crate::cpu::render_f64_rows(s, buf, spec, y, rows),
             (None, None) => crate::cpu::render_f32_rows(buf, spec, y, rows),
-            (None, Some(records)) => {
-                let at = y as usize * w as usize;
-                let band = &mut records[at..at + rows as usize * w as usize];
-                crate::cpu::render_f32_rows_aov(buf, spec, y, band)
+            (None, Some(aovs)) => {
+                let blocks = aovs.blocks(y, rows, crate::cpu::packet::PACKET_H);
+                crate::cpu::render_f32_rows_aov(buf, spec, y, rows, blocks)
             }
         };
         frame += t.elapsed();
