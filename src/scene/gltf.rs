@@ -32,6 +32,9 @@ pub enum GltfError {
     /// The `gltf` crate refused the file (JSON, GLB container, or its validation).
     #[error("glTF: {0}")]
     Document(gltf::Error),
+    /// A GLB's header or chunk lengths disagree with the file.
+    #[error("GLB {0}")]
+    Container(String),
     /// A buffer could not be read.
     #[error("glTF buffer {index} ({uri}): {error}")]
     Buffer {
@@ -121,6 +124,51 @@ pub struct GltfMesh {
     pub warnings: Vec<String>,
 }
 
+/// Checks a GLB's container (a file that starts with the magic `glTF`) as the
+/// specification states it: a 12-byte header whose length is the file's, then a JSON
+/// chunk and at most one BIN chunk, each inside the file. The `gltf` crate takes a
+/// header that claims less than the file holds, and one under 12 bytes overflows its
+/// arithmetic; a file of any other kind is left to it.
+fn check_glb(bytes: &[u8]) -> Result<(), GltfError> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let word = |at: usize| -> Option<u32> {
+        let b = bytes.get(at..at + 4)?;
+        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let bad = |m: String| Err(GltfError::Container(m));
+    let Some(total) = word(8) else {
+        return bad(format!("header: {} bytes, where it takes 12", bytes.len()));
+    };
+    if total as usize != bytes.len() {
+        return bad(format!(
+            "header: a total length of {total} bytes, but the file holds {}",
+            bytes.len()
+        ));
+    }
+    let mut at = 12usize;
+    let mut chunk = 0;
+    while at < bytes.len() {
+        let (Some(len), Some(kind)) = (word(at), bytes.get(at + 4..at + 8)) else {
+            return bad(format!("chunk {chunk}: a header cut short at byte {at}"));
+        };
+        let end = (at + 8).checked_add(len as usize);
+        if end.is_none_or(|e| e > bytes.len()) {
+            return bad(format!(
+                "chunk {chunk} ({}): a length of {len} bytes from byte {}, past the file's end \
+                 at {}",
+                String::from_utf8_lossy(kind).trim_end_matches('\0'),
+                at + 8,
+                bytes.len()
+            ));
+        }
+        at = end.unwrap_or(bytes.len());
+        chunk += 1;
+    }
+    Ok(())
+}
+
 /// Reads the glTF at `path` (its bytes `bytes`), its external buffers through `read`.
 pub fn read(
     bytes: &[u8],
@@ -128,6 +176,7 @@ pub fn read(
     read: &super::ReadFile<'_>,
     normals: Normals,
 ) -> Result<GltfMesh, GltfError> {
+    check_glb(bytes)?;
     let g = gltf::Gltf::from_slice(bytes).map_err(GltfError::Document)?;
     let folder = path.parent().unwrap_or(Path::new("."));
     let mut self_contained = true;
