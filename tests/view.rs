@@ -392,6 +392,43 @@ fn saved_scenes_reload_and_broken_ones_do_not_stop_the_viewer() {
     assert!(v.quit().success(), "Esc exits 0");
 }
 
+/// A file caught half-written (the scene saved in two pieces, the viewer watching between
+/// them) is an error on stderr while the last good picture stays; once the rest is written
+/// the view is the whole file's. The twin: the whole file's picture is not the old one.
+#[test]
+fn a_scene_caught_half_written_keeps_the_last_picture() {
+    use std::io::Write;
+    let x = Xvfb::start();
+    let dir = Scratch::new("view-half");
+    let path = dir.join("s.toml");
+    let original = std::fs::read_to_string(scene("bb8")).unwrap();
+    std::fs::write(&path, &original).unwrap();
+    let mut v = Viewer::start(&x, &path, &dir);
+    let before = v.save(&dir);
+    // The eye moved 0.5 along x.
+    let at = original.find("eye = [").expect("bb8 has an eye") + "eye = [".len();
+    let end = at + original[at..].find(',').unwrap();
+    let x: f32 = original[at..end].trim().parse().unwrap();
+    let whole = format!("{}{:?}{}", &original[..at], x + 0.5, &original[end..]);
+    // Cut in the middle of a table, where the first piece cannot parse.
+    let cut = whole.find("[[spheres]]").expect("bb8 has spheres") + 5;
+    let mut f = std::fs::File::create(&path).unwrap();
+    f.write_all(whole[..cut].as_bytes()).unwrap();
+    f.flush().unwrap();
+    let line = v.wait_err("error:");
+    assert!(line.contains("s.toml:"), "{line}");
+    assert!(v.running(), "the viewer exited on a half-written file");
+    assert!(v.save(&dir) == before, "the last good picture stays");
+    f.write_all(whole[cut..].as_bytes()).unwrap();
+    f.flush().unwrap();
+    drop(f);
+    v.wait_err("reloaded");
+    let after = v.save(&dir);
+    assert!(after == render(&path, &dir.join("whole.png")));
+    assert!(after != before, "the twin: the moved eye shows");
+    assert!(v.quit().success(), "Esc exits 0");
+}
+
 /// A scripted drag with the left button orbits the camera; C prints it as a [camera]
 /// table; a scene file with that table renders what P saves. The twin: the camera moved.
 #[test]
