@@ -124,6 +124,39 @@ pub struct GltfMesh {
     pub warnings: Vec<String>,
 }
 
+/// The glTF document of `bytes`, validated. The container is checked first
+/// ([`check_glb`]), and every primitive's POSITION accessor is checked to exist before the
+/// `gltf` crate validates: its validation indexes that accessor unchecked (gltf-json
+/// 1.4.1, mesh.rs), a panic on a file that names one past the list.
+fn document(bytes: &[u8]) -> Result<gltf::Gltf, GltfError> {
+    check_glb(bytes)?;
+    let g = gltf::Gltf::from_slice_without_validation(bytes).map_err(GltfError::Document)?;
+    let json = g.document.into_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(a) = prim.attributes.get(&position)
+                && a.value() >= json.accessors.len()
+            {
+                return Err(GltfError::Primitive {
+                    mesh: m,
+                    primitive: p,
+                    message: format!(
+                        "POSITION names accessor {}, but the file has {}",
+                        a.value(),
+                        json.accessors.len()
+                    ),
+                });
+            }
+        }
+    }
+    let document = gltf::Document::from_json(json).map_err(GltfError::Document)?;
+    Ok(gltf::Gltf {
+        document,
+        blob: g.blob,
+    })
+}
+
 /// Checks a GLB's container (a file that starts with the magic `glTF`) as the
 /// specification states it: a 12-byte header whose length is the file's, then a JSON
 /// chunk and at most one BIN chunk, each inside the file. The `gltf` crate takes a
@@ -176,8 +209,7 @@ pub fn read(
     read: &super::ReadFile<'_>,
     normals: Normals,
 ) -> Result<GltfMesh, GltfError> {
-    check_glb(bytes)?;
-    let g = gltf::Gltf::from_slice(bytes).map_err(GltfError::Document)?;
+    let g = document(bytes)?;
     let folder = path.parent().unwrap_or(Path::new("."));
     let mut self_contained = true;
     let mut buffers: Vec<Vec<u8>> = Vec::new();
