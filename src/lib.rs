@@ -22,11 +22,11 @@ pub mod bvh;
 pub mod cache;
 pub mod compare;
 pub mod cpu;
-#[doc(hidden)]
+#[cfg(feature = "testing")]
 pub mod fuzzing;
 pub mod gpu;
 pub mod image;
-#[doc(hidden)]
+#[cfg(feature = "testing")]
 pub mod oracle;
 pub mod render;
 pub mod scene;

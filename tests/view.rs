@@ -413,13 +413,13 @@ fn a_scene_caught_half_written_keeps_the_last_picture() {
     // Cut in the middle of a table, where the first piece cannot parse.
     let cut = whole.find("[[spheres]]").expect("bb8 has spheres") + 5;
     let mut f = std::fs::File::create(&path).unwrap();
-    f.write_all(whole[..cut].as_bytes()).unwrap();
+    f.write_all(&whole.as_bytes()[..cut]).unwrap();
     f.flush().unwrap();
     let line = v.wait_err("error:");
     assert!(line.contains("s.toml:"), "{line}");
     assert!(v.running(), "the viewer exited on a half-written file");
     assert!(v.save(&dir) == before, "the last good picture stays");
-    f.write_all(whole[cut..].as_bytes()).unwrap();
+    f.write_all(&whole.as_bytes()[cut..]).unwrap();
     f.flush().unwrap();
     drop(f);
     v.wait_err("reloaded");
