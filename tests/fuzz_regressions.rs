@@ -63,6 +63,30 @@ fn a_position_accessor_past_the_list_is_an_error_naming_it() {
     gltf_load(&seed).expect("the twin: the seed loads");
 }
 
+/// A glTF primitive whose indices are signed shorts (the fuzzer's finding, in
+/// tests/data/fuzz/) reached the `gltf` crate's unreachable code (gltf 1.4.1); glint
+/// refuses it naming the primitive and the accessor. The twin: the same file with unsigned
+/// shorts is not refused for its indices' type.
+#[test]
+fn signed_indices_are_an_error_naming_the_accessor() {
+    let data = std::fs::read(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz/gltf_load-signed-indices.bin"),
+    )
+    .unwrap();
+    let e = gltf_load(&data).unwrap_err();
+    assert!(
+        e.contains("glTF mesh 0 primitive 0") && e.contains("indices: accessor 1 is not"),
+        "{e}"
+    );
+    let (from, to) = (b"\"componentType\": 5122", b"\"componentType\": 5123");
+    let at = data.windows(from.len()).position(|w| w == from).unwrap();
+    let mut unsigned = data.clone();
+    unsigned[at..at + to.len()].copy_from_slice(to);
+    if let Err(e) = gltf_load(&unsigned) {
+        assert!(!e.contains("indices: accessor"), "the twin: {e}");
+    }
+}
+
 /// The mesh and texture harnesses on their seed corpora (`fuzz/seeds/TARGET/`, made from
 /// small valid files): each seed is accepted (and checked: finite vertices, indices in
 /// range), and every cut of it (its first k bytes, k over a spread of lengths) is accepted

@@ -125,28 +125,47 @@ pub struct GltfMesh {
 }
 
 /// The glTF document of `bytes`, validated. The container is checked first
-/// ([`check_glb`]), and every primitive's POSITION accessor is checked to exist before the
-/// `gltf` crate validates: its validation indexes that accessor unchecked (gltf-json
-/// 1.4.1, mesh.rs), a panic on a file that names one past the list.
+/// ([`check_glb`]); then, before the `gltf` crate validates, every primitive's POSITION
+/// accessor is checked to exist (its validation indexes it unchecked: gltf-json 1.4.1,
+/// mesh.rs) and its indices to be unsigned (it reads any other type as unreachable code:
+/// gltf 1.4.1, mesh/mod.rs). Both were panics the fuzzer found.
 fn document(bytes: &[u8]) -> Result<gltf::Gltf, GltfError> {
     check_glb(bytes)?;
     let g = gltf::Gltf::from_slice_without_validation(bytes).map_err(GltfError::Document)?;
     let json = g.document.into_json();
+    use gltf::json::accessor::{ComponentType, GenericComponentType};
+    use gltf::json::validation::Checked;
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
-            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            let bad = |message: String| GltfError::Primitive {
+                mesh: m,
+                primitive: p,
+                message,
+            };
+            let position = Checked::Valid(gltf::Semantic::Positions);
             if let Some(a) = prim.attributes.get(&position)
                 && a.value() >= json.accessors.len()
             {
-                return Err(GltfError::Primitive {
-                    mesh: m,
-                    primitive: p,
-                    message: format!(
-                        "POSITION names accessor {}, but the file has {}",
-                        a.value(),
-                        json.accessors.len()
-                    ),
-                });
+                return Err(bad(format!(
+                    "POSITION names accessor {}, but the file has {}",
+                    a.value(),
+                    json.accessors.len()
+                )));
+            }
+            // The crate reads indices of any other type as unreachable code.
+            if let Some(i) = prim.indices {
+                let kind = json.accessors.get(i.value()).map(|a| &a.component_type);
+                if !matches!(
+                    kind,
+                    None | Some(Checked::Valid(GenericComponentType(
+                        ComponentType::U8 | ComponentType::U16 | ComponentType::U32
+                    )))
+                ) {
+                    return Err(bad(format!(
+                        "indices: accessor {} is not of unsigned bytes, shorts or ints",
+                        i.value()
+                    )));
+                }
             }
         }
     }
