@@ -57,7 +57,7 @@ fn a_position_accessor_past_the_list_is_an_error_naming_it() {
     let without = text.replace("\"accessors\":", "\"unknown\":");
     let e = gltf_load(without.as_bytes()).unwrap_err();
     assert!(
-        e.contains("glTF mesh 0 primitive 0") && e.contains("POSITION names accessor 0"),
+        e.contains("glTF mesh 0 primitive 0") && e.contains("POSITION: accessor 0 is missing"),
         "{e}"
     );
     gltf_load(&seed).expect("the twin: the seed loads");
@@ -75,7 +75,8 @@ fn signed_indices_are_an_error_naming_the_accessor() {
     .unwrap();
     let e = gltf_load(&data).unwrap_err();
     assert!(
-        e.contains("glTF mesh 0 primitive 0") && e.contains("indices: accessor 1 is not"),
+        e.contains("glTF mesh 0 primitive 0")
+            && e.contains("indices: accessor 1 is not a Scalar of"),
         "{e}"
     );
     let (from, to) = (b"\"componentType\": 5122", b"\"componentType\": 5123");

@@ -125,15 +125,16 @@ pub struct GltfMesh {
 }
 
 /// The glTF document of `bytes`, validated. The container is checked first
-/// ([`check_glb`]); then, before the `gltf` crate validates, every primitive's POSITION
-/// accessor is checked to exist (its validation indexes it unchecked: gltf-json 1.4.1,
-/// mesh.rs) and its indices to be unsigned (it reads any other type as unreachable code:
-/// gltf 1.4.1, mesh/mod.rs). Both were panics the fuzzer found.
+/// ([`check_glb`]); then, before the `gltf` crate validates, every accessor glint reads
+/// ([`check_accessor`]): the crate's validation indexes POSITION's unchecked (gltf-json
+/// 1.4.1, mesh.rs) and its readers take indices of another type for unreachable code and
+/// an empty accessor for a count to subtract one from (gltf 1.4.1), panics the fuzzer
+/// found.
 fn document(bytes: &[u8]) -> Result<gltf::Gltf, GltfError> {
     check_glb(bytes)?;
     let g = gltf::Gltf::from_slice_without_validation(bytes).map_err(GltfError::Document)?;
     let json = g.document.into_json();
-    use gltf::json::accessor::{ComponentType, GenericComponentType};
+    use gltf::json::accessor::{ComponentType as C, Type};
     use gltf::json::validation::Checked;
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
@@ -142,30 +143,37 @@ fn document(bytes: &[u8]) -> Result<gltf::Gltf, GltfError> {
                 primitive: p,
                 message,
             };
-            let position = Checked::Valid(gltf::Semantic::Positions);
-            if let Some(a) = prim.attributes.get(&position)
-                && a.value() >= json.accessors.len()
-            {
-                return Err(bad(format!(
-                    "POSITION names accessor {}, but the file has {}",
-                    a.value(),
-                    json.accessors.len()
-                )));
-            }
-            // The crate reads indices of any other type as unreachable code.
-            if let Some(i) = prim.indices {
-                let kind = json.accessors.get(i.value()).map(|a| &a.component_type);
-                if !matches!(
-                    kind,
-                    None | Some(Checked::Valid(GenericComponentType(
-                        ComponentType::U8 | ComponentType::U16 | ComponentType::U32
-                    )))
-                ) {
-                    return Err(bad(format!(
-                        "indices: accessor {} is not of unsigned bytes, shorts or ints",
-                        i.value()
-                    )));
-                }
+            let attribute = |s: gltf::Semantic| prim.attributes.get(&Checked::Valid(s)).copied();
+            let read: [(&str, Option<usize>, &[C], Type); 4] = [
+                (
+                    "POSITION",
+                    attribute(gltf::Semantic::Positions).map(|i| i.value()),
+                    &[C::F32],
+                    Type::Vec3,
+                ),
+                (
+                    "NORMAL",
+                    attribute(gltf::Semantic::Normals).map(|i| i.value()),
+                    &[C::F32],
+                    Type::Vec3,
+                ),
+                (
+                    "TEXCOORD_0",
+                    attribute(gltf::Semantic::TexCoords(0)).map(|i| i.value()),
+                    &[C::F32, C::U8, C::U16],
+                    Type::Vec2,
+                ),
+                (
+                    "indices",
+                    prim.indices.map(|i| i.value()),
+                    &[C::U8, C::U16, C::U32],
+                    Type::Scalar,
+                ),
+            ];
+            for (what, index, types, dims) in read {
+                let Some(index) = index else { continue };
+                check_accessor(&json, index, types, dims)
+                    .map_err(|e| bad(format!("{what}: accessor {index} {e}")))?;
             }
         }
     }
@@ -174,6 +182,47 @@ fn document(bytes: &[u8]) -> Result<gltf::Gltf, GltfError> {
         document,
         blob: g.blob,
     })
+}
+
+/// Checks accessor `index` of `json` as the specification states it for what glint reads
+/// through the `gltf` crate, whose readers assume it (and panic, or read unreachable
+/// code, where it does not hold): it exists, its component type is one of `types` and its
+/// type `dims`, it holds at least one element (so does a sparse part), and its buffer
+/// view's stride, where given, is at least the element's size.
+fn check_accessor(
+    json: &gltf::json::Root,
+    index: usize,
+    types: &[gltf::json::accessor::ComponentType],
+    dims: gltf::json::accessor::Type,
+) -> Result<(), String> {
+    use gltf::json::validation::Checked;
+    let Some(a) = json.accessors.get(index) else {
+        return Err(format!("is missing: the file has {}", json.accessors.len()));
+    };
+    let kind = match a.component_type {
+        Checked::Valid(k) => Some(k.0),
+        Checked::Invalid => None,
+    };
+    if !kind.is_some_and(|k| types.contains(&k)) || a.type_ != Checked::Valid(dims) {
+        return Err(format!("is not a {dims:?} of {types:?}"));
+    }
+    if a.count.0 == 0 || a.sparse.as_ref().is_some_and(|s| s.count.0 == 0) {
+        return Err("holds no element".into());
+    }
+    let size = kind.map_or(0, |k| k.size()) * dims.multiplicity();
+    let stride = a
+        .buffer_view
+        .and_then(|v| json.buffer_views.get(v.value()))
+        .and_then(|v| v.byte_stride);
+    if let Some(s) = stride
+        && s.0 < size
+    {
+        return Err(format!(
+            "has a stride of {} bytes, under its element's {size}",
+            s.0
+        ));
+    }
+    Ok(())
 }
 
 /// Checks a GLB's container (a file that starts with the magic `glTF`) as the
