@@ -126,3 +126,67 @@ fn the_mesh_and_texture_harnesses_take_their_seeds_and_every_cut_of_them() {
 fn a_refusal_without_a_line_is_a_finding() {
     glint::fuzzing::check_refused("fuzz.toml: meshes[0].file: bad");
 }
+
+/// The shipped scenes and OBJ/MTL pairs seed `scene_parse` and `obj_load` (`cargo fuzz run
+/// scene_parse corpus/scene_parse ../scenes`): each scene that names no file is accepted and
+/// the others refused at the key that names one (the harness reads no file), each OBJ with its
+/// MTL after a 0xFF byte is accepted (refused at its texture where the MTL names one: the
+/// harness has no image to give), and every cut of them is taken without a panic. The
+/// twin: a cut that ends inside a table's header is refused.
+#[test]
+fn the_shipped_scenes_seed_scene_parse_and_obj_load() {
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let (mut tomls, mut objs) = (0, 0);
+    let mut paths: Vec<_> = std::fs::read_dir(&scenes)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    paths.sort();
+    for path in paths {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or_default();
+        let (harness, data): (fn(&[u8]) -> Result<(), String>, Vec<u8>) = match ext {
+            "toml" => {
+                let data = std::fs::read(&path).unwrap();
+                let text = String::from_utf8_lossy(&data);
+                let names_a_file = text.contains("file = ") || text.contains("map_");
+                match scene_parse(&data) {
+                    Ok(()) => assert!(!names_a_file, "{}", path.display()),
+                    Err(e) => assert!(
+                        names_a_file && e.starts_with("fuzz.toml:") && e.contains("no files"),
+                        "{}: {e}",
+                        path.display()
+                    ),
+                }
+                tomls += 1;
+                (scene_parse, data)
+            }
+            "obj" => {
+                let mut data = std::fs::read(&path).unwrap();
+                data.push(0xFF);
+                let mtl = std::fs::read(path.with_extension("mtl")).unwrap_or_default();
+                data.extend(&mtl);
+                // The harness hands the MTL's bytes for every other file, a texture too.
+                match obj_load(&data) {
+                    Ok(()) => {}
+                    Err(e) if String::from_utf8_lossy(&mtl).contains("map_") => {
+                        assert!(e.contains("texture"), "{}: {e}", path.display())
+                    }
+                    Err(e) => panic!("{}: {e}", path.display()),
+                }
+                objs += 1;
+                (obj_load, data)
+            }
+            _ => continue,
+        };
+        for k in (0..data.len()).step_by((data.len() / 61).max(1)) {
+            let _ = harness(&data[..k]);
+        }
+    }
+    assert!(tomls >= 5 && objs >= 1, "{tomls} scenes, {objs} OBJs");
+    let bb8 = std::fs::read_to_string(scenes.join("bb8.toml")).unwrap();
+    let cut = bb8.find("[camera]").unwrap() + 4;
+    assert!(scene_parse(&bb8.as_bytes()[..cut]).is_err(), "the twin");
+}
