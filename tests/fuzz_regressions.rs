@@ -5,6 +5,9 @@ use std::path::Path;
 
 use glint::fuzzing::{gltf_load, obj_load, ply_load, scene_parse, texture_load};
 
+/// A fuzz target's harness.
+type Harness = fn(&[u8]) -> Result<(), String>;
+
 #[test]
 fn every_fuzz_finding_is_an_error_not_a_panic() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz");
@@ -16,7 +19,6 @@ fn every_fuzz_finding_is_an_error_not_a_panic() {
             continue;
         }
         let data = std::fs::read(&path).unwrap();
-        type Harness = fn(&[u8]) -> Result<(), String>;
         let harness: Harness = match name.split('-').next().unwrap_or_default() {
             "obj_load" => obj_load,
             "ply_load" => ply_load,
@@ -95,8 +97,6 @@ fn signed_indices_are_an_error_naming_the_accessor() {
 /// invariants themselves and panic where one fails.
 #[test]
 fn the_mesh_and_texture_harnesses_take_their_seeds_and_every_cut_of_them() {
-    use glint::fuzzing::{gltf_load, ply_load, texture_load};
-    type Harness = fn(&[u8]) -> Result<(), String>;
     let targets: [(&str, Harness); 3] = [
         ("ply_load", ply_load),
         ("gltf_load", gltf_load),
@@ -147,7 +147,7 @@ fn the_shipped_scenes_seed_scene_parse_and_obj_load() {
             .extension()
             .and_then(|e| e.to_str())
             .unwrap_or_default();
-        let (harness, data): (fn(&[u8]) -> Result<(), String>, Vec<u8>) = match ext {
+        let (harness, data): (Harness, Vec<u8>) = match ext {
             "toml" => {
                 let data = std::fs::read(&path).unwrap();
                 let text = String::from_utf8_lossy(&data);
