@@ -111,8 +111,10 @@ def render(
     through each pixel's centre: (height, width) for ``t``, ``depth``, ``mask`` and the
     ids, (height, width, 3) for ``position``, the normals and ``albedo``; float32, except
     the ids (uint32, 4294967295 on a miss). docs/aov.md defines each. An unknown name
-    raises ``ValueError``.
+    raises ``ValueError``; a single string, ``TypeError``.
     """
+    if isinstance(aovs, str):
+        raise TypeError(f"aovs: a list of AOV names, such as [{aovs!r}], not a string")
     return renderer(backend, adapter, threads).render(
         scene,
         size=size,

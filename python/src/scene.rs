@@ -152,7 +152,7 @@ impl Scene {
     #[staticmethod]
     #[pyo3(signature = (d, base_dir=PathBuf::from(".")))]
     fn from_dict(py: Python<'_>, d: &Bound<'_, PyDict>, base_dir: PathBuf) -> PyResult<Scene> {
-        let table = to_table(py, d, "")?;
+        let table = to_table(py, d, "", 0)?;
         let text = toml::to_string(&table).map_err(|e| {
             scene_error(
                 py,
@@ -445,7 +445,13 @@ pub(crate) fn scene_arg(py: Python<'_>, scene: &Bound<'_, PyAny>) -> PyResult<Py
 }
 
 /// A dict as a TOML table; `at` is the key path so far, for errors.
-fn to_table(py: Python<'_>, d: &Bound<'_, PyDict>, at: &str) -> PyResult<toml::Table> {
+fn to_table(
+    py: Python<'_>,
+    d: &Bound<'_, PyDict>,
+    at: &str,
+    depth: usize,
+) -> PyResult<toml::Table> {
+    too_deep(py, at, depth)?;
     let mut t = toml::Table::new();
     for (k, v) in d.iter() {
         let k: String = k.extract().map_err(|_| {
@@ -465,14 +471,41 @@ fn to_table(py: Python<'_>, d: &Bound<'_, PyDict>, at: &str) -> PyResult<toml::T
         if v.is_none() {
             continue; // None: the key's default, as if it were absent.
         }
-        t.insert(k, to_value(py, &v, &key)?);
+        t.insert(k, to_value(py, &v, &key, depth + 1)?);
     }
     Ok(t)
 }
 
-/// A Python value as a TOML value.
-fn to_value(py: Python<'_>, v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
+/// How deep a scene dict may nest: a scene file's deepest key (`camera.keys[0].eye[0]`) is
+/// four levels down; a dict or list that contains itself would nest without end.
+const MAX_DEPTH: usize = 32;
+
+/// A `SceneError` naming `key` where `depth` is past [`MAX_DEPTH`].
+fn too_deep(py: Python<'_>, key: &str, depth: usize) -> PyResult<()> {
+    if depth <= MAX_DEPTH {
+        return Ok(());
+    }
+    Err(scene_error(
+        py,
+        format!(
+            "<dict>: {key}: nested deeper than {MAX_DEPTH} levels (a dict or list that \
+             contains itself?)"
+        ),
+        Some(DICT_NAME.into()),
+        None,
+        Some(key.to_string()),
+    ))
+}
+
+/// A Python value as a TOML value, `depth` levels down the dict.
+fn to_value(
+    py: Python<'_>,
+    v: &Bound<'_, PyAny>,
+    key: &str,
+    depth: usize,
+) -> PyResult<toml::Value> {
     use toml::Value as V;
+    too_deep(py, key, depth)?;
     if v.is_instance_of::<PyBool>() {
         return Ok(V::Boolean(v.extract()?));
     }
@@ -488,7 +521,7 @@ fn to_value(py: Python<'_>, v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::V
         return Ok(V::String(v.extract()?));
     }
     if let Ok(d) = v.cast::<PyDict>() {
-        return Ok(V::Table(to_table(py, d, key)?));
+        return Ok(V::Table(to_table(py, d, key, depth + 1)?));
     }
     // numpy scalars and arrays, tuples, other sequences; paths.
     let np_kind = v
@@ -514,7 +547,7 @@ fn to_value(py: Python<'_>, v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::V
     {
         let mut out = Vec::new();
         for (i, x) in list.iter().enumerate() {
-            out.push(to_value(py, &x, &format!("{key}[{i}]"))?);
+            out.push(to_value(py, &x, &format!("{key}[{i}]"), depth + 1)?);
         }
         return Ok(V::Array(out));
     }

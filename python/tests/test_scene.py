@@ -83,6 +83,34 @@ def test_a_dict_is_validated_as_a_file_is():
     assert glint.render(GOOD, backend="cpu").shape == (24, 32, 4)
 
 
+def test_dicts_that_contain_themselves_are_errors_not_crashes():
+    # A dict or list that contains itself, and one nested 10,000 deep, is a SceneError
+    # naming where it went too deep (it was a stack overflow: the process died).
+    looped: dict = dict(GOOD)
+    looped["camera"] = dict(GOOD["camera"])
+    looped["camera"]["self"] = looped["camera"]
+    with pytest.raises(glint.SceneError, match="camera.self.self.*nested deeper than 32"):
+        glint.Scene.from_dict(looped)
+    items: list = []
+    items.append(items)
+    with pytest.raises(glint.SceneError, match=r"spheres\[0\]\[0\].*nested deeper"):
+        glint.Scene.from_dict(dict(GOOD, spheres=items))
+    deep: dict = {}
+    for _ in range(10_000):
+        deep = {"a": deep}
+    with pytest.raises(glint.SceneError, match="nested deeper than 32") as e:
+        glint.Scene.from_dict(deep)
+    assert e.value.key.startswith("a.a.a")
+    # The twin: the same scene without the loop loads.
+    assert glint.Scene.from_dict(dict(GOOD, camera=dict(GOOD["camera"]))).spheres == 1
+
+
+def test_aovs_as_one_string_is_a_type_error():
+    with pytest.raises(TypeError, match=r"aovs: a list of AOV names, such as \['depth'\]"):
+        glint.render(GOOD, backend="cpu", aovs="depth")
+    assert set(glint.render(GOOD, backend="cpu", aovs=["depth"])) == {"color", "depth"}
+
+
 def test_toml_text_errors_name_the_line():
     with pytest.raises(glint.SceneError) as e:
         glint.Scene.from_toml("[camera]\nfov = 'wide'\n", base_dir="/tmp")
