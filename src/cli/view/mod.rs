@@ -9,7 +9,6 @@
 //! texels (`textureLoad`, no filtering), so the window shows exactly the bytes `glint
 //! render` writes. `--screenshot` reads that texture back (surfaces need not allow reads).
 
-use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -20,9 +19,13 @@ use glint::scene::{LoadOptions, Scene};
 use glint::{Backend, RenderOptions, Renderer};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
-use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
+
+mod watch;
+
+use watch::Watch;
 
 /// What `glint view` was asked.
 pub struct Options {
@@ -455,23 +458,7 @@ impl App {
 
 /// The copy from the viewer's texture to the surface: one triangle over the screen, each
 /// fragment the texel under it.
-const BLIT: &str = "
-@group(0) @binding(0) var picture: texture_2d<f32>;
-
-@vertex
-fn vs(@builtin(vertex_index) k: u32) -> @builtin(position) vec4<f32> {
-    let x = f32((k << 1u) & 2u) * 2.0 - 1.0;
-    let y = f32(k & 2u) * 2.0 - 1.0;
-    return vec4<f32>(x, y, 0.0, 1.0);
-}
-
-@fragment
-fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
-    let size = vec2<i32>(textureDimensions(picture));
-    let at = min(vec2<i32>(p.xy), size - vec2<i32>(1, 1));
-    return textureLoad(picture, at, 0);
-}
-";
+const BLIT: &str = include_str!("../../../shaders/blit.wgsl");
 
 impl View {
     /// The window, a device that can present to it and trace on it, and the pipeline
@@ -778,63 +765,4 @@ fn picture_texture(
         }],
     });
     (texture, bind)
-}
-
-/// The watch on the scene's files: their folders watched (editors often save by writing a
-/// new file and renaming it over the old), events kept for the files the scene read.
-struct Watch {
-    watcher: notify::RecommendedWatcher,
-    files: Arc<std::sync::Mutex<HashSet<PathBuf>>>,
-    folders: HashSet<PathBuf>,
-}
-
-impl Watch {
-    fn new(proxy: EventLoopProxy<UserEvent>) -> Result<Watch> {
-        let files: Arc<std::sync::Mutex<HashSet<PathBuf>>> = Arc::default();
-        let seen = files.clone();
-        let watcher = notify::recommended_watcher(move |r: notify::Result<notify::Event>| {
-            let Ok(event) = r else { return };
-            if matches!(event.kind, notify::EventKind::Access(_)) {
-                return;
-            }
-            let files = seen.lock().expect("the watch's file list");
-            if event.paths.iter().any(|p| files.contains(&absolute(p))) {
-                let _ = proxy.send_event(UserEvent::Changed);
-            }
-        })
-        .context("cannot watch the scene's files")?;
-        Ok(Watch {
-            watcher,
-            files,
-            folders: HashSet::new(),
-        })
-    }
-
-    /// Watches `inputs` (a scene's files), and their folders.
-    fn follow(&mut self, inputs: &[PathBuf]) {
-        use notify::Watcher;
-        let files: HashSet<PathBuf> = inputs.iter().map(|p| absolute(p)).collect();
-        for f in &files {
-            if let Some(dir) = f.parent()
-                && self.folders.insert(dir.to_owned())
-                && let Err(e) = self.watcher.watch(dir, notify::RecursiveMode::NonRecursive)
-            {
-                eprintln!("warning: cannot watch {}: {e}", dir.display());
-            }
-        }
-        *self.files.lock().expect("the watch's file list") = files;
-    }
-}
-
-/// `p` made absolute (against the current folder) and with `.` and `..` resolved as far as
-/// the file system allows, so that paths from the scene and from the watcher compare.
-fn absolute(p: &Path) -> PathBuf {
-    let p = std::path::absolute(p).unwrap_or_else(|_| p.to_owned());
-    match (
-        p.parent().and_then(|d| d.canonicalize().ok()),
-        p.file_name(),
-    ) {
-        (Some(dir), Some(name)) => dir.join(name),
-        _ => p,
-    }
 }
