@@ -28,6 +28,7 @@
 mod aov;
 mod common;
 mod prims;
+mod shade;
 mod trace;
 mod whitted;
 

@@ -11,7 +11,8 @@
 
 use super::common::{Build, LANES, Lanes, Mask, PerLane};
 use super::prims::shear_lanes;
-use super::trace::{NO_SLOT, PacketHits, closest_hit_lanes, shade_lanes};
+use super::shade::shade_lanes;
+use super::trace::{NO_SLOT, PacketHits, closest_hit_lanes};
 use crate::buffers::{PRIM_NONE, TRIANGLE_WATERTIGHT};
 use crate::cpu::common::{Globals, Ray, clamp01, flush3};
 use crate::cpu::prims::prim_material;
