@@ -12,23 +12,64 @@ use crate::buffers::{SceneBuffers, Specialisation};
 use crate::scene::{ReadError, ReadFile, Scene};
 
 /// A valid scene is flattened, its BVH built, and rendered small on the CPU mirror.
-fn render_small(scene: &Scene) {
+fn render_small(scene: &Scene) -> crate::image::Image {
     let (w, h) = scene.size();
     let buf = SceneBuffers::new(scene, w.min(4), h.min(4), scene.triangle);
-    let _ = crate::cpu::render_f32(&buf, Specialisation::for_scene(&buf));
+    crate::cpu::render_f32(&buf, Specialisation::for_scene(&buf))
+}
+
+/// A reader that refuses every file: the harnesses that read a scene alone touch no disk.
+fn no_files(_: &Path) -> Result<Vec<u8>, ReadError> {
+    Err(ReadError::Other("no files while fuzzing".into()))
 }
 
 /// Target `scene_parse`: the bytes as a scene file. Mesh files it names are refused
 /// without touching the disk.
 pub fn scene_parse(data: &[u8]) -> Result<(), String> {
     let src = std::str::from_utf8(data).map_err(|e| e.to_string())?;
-    let no_files = |_: &Path| -> Result<Vec<u8>, ReadError> {
-        Err(ReadError::Other("no files while fuzzing".into()))
-    };
     let scene =
         Scene::parse_with(src, Path::new("fuzz.toml"), &no_files).map_err(|e| e.to_string())?;
     render_small(&scene);
     Ok(())
+}
+
+/// Target `dict_load`: the bytes as a scene file, and the same scene as `Scene.from_dict`
+/// reads it: the file's table written out by `toml` (what the Python package does with
+/// the table a dict becomes) and read back as `<dict>`. The file and its table must agree:
+/// both refused, or both valid with the same 4×4 picture in every bit; the harness panics
+/// (a finding) where they do not. Returns the file's own verdict.
+pub fn dict_load(data: &[u8]) -> Result<(), String> {
+    let src = std::str::from_utf8(data).map_err(|e| e.to_string())?;
+    let table: toml::Table = toml::from_str(src).map_err(|e| e.to_string())?;
+    let text = toml::to_string(&table).map_err(|e| e.to_string())?;
+    file_and_dict_agree(src, &text)
+}
+
+/// `dict_load`'s check: the scene file `src` and the text `dict` (its table as the Python
+/// package writes it) give the same verdict and, where valid, the same 4×4 picture in
+/// every bit; a panic where they do not. Returns the file's own verdict.
+pub fn file_and_dict_agree(src: &str, dict: &str) -> Result<(), String> {
+    let file = Scene::parse_with(src, Path::new("fuzz.toml"), &no_files);
+    let from_dict = Scene::parse_with(dict, Path::new("<dict>"), &no_files);
+    match (&file, &from_dict) {
+        (Ok(a), Ok(b)) => {
+            let (a, b) = (render_small(a), render_small(b));
+            let bits = |i: &crate::image::Image| -> Vec<u32> {
+                i.pixels.iter().flatten().map(|x| x.to_bits()).collect()
+            };
+            assert!(
+                bits(&a) == bits(&b),
+                "the file and its table render differently:\n{src}\n---\n{dict}"
+            );
+        }
+        (Err(_), Err(_)) => {}
+        (a, b) => panic!(
+            "the file and its table disagree: {:?} against {:?}\n{src}\n---\n{dict}",
+            a.as_ref().err().map(|e| e.to_string()),
+            b.as_ref().err().map(|e| e.to_string())
+        ),
+    }
+    file.map(|_| ()).map_err(|e| e.to_string())
 }
 
 /// The scene that target `obj_load` reads its mesh through (with scale and rotate).

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use glint::fuzzing::{gltf_load, obj_load, ply_load, scene_parse, texture_load};
+use glint::fuzzing::{dict_load, gltf_load, obj_load, ply_load, scene_parse, texture_load};
 
 /// A fuzz target's harness.
 type Harness = fn(&[u8]) -> Result<(), String>;
@@ -24,6 +24,7 @@ fn every_fuzz_finding_is_an_error_not_a_panic() {
             "ply_load" => ply_load,
             "gltf_load" => gltf_load,
             "texture_load" => texture_load,
+            "dict_load" => dict_load,
             _ => scene_parse,
         };
         let r = harness(&data);
@@ -127,11 +128,19 @@ fn a_refusal_without_a_line_is_a_finding() {
     glint::fuzzing::check_refused("fuzz.toml: meshes[0].file: bad");
 }
 
+/// `scene_parse`, then `dict_load`, on the same bytes.
+fn scene_and_dict(data: &[u8]) -> Result<(), String> {
+    let _ = scene_parse(data);
+    dict_load(data)
+}
+
 /// The shipped scenes and OBJ/MTL pairs seed `scene_parse` and `obj_load` (`cargo fuzz run
 /// scene_parse corpus/scene_parse ../scenes`): each scene that names no file is accepted and
 /// the others refused at the key that names one (the harness reads no file), each OBJ with its
 /// MTL after a 0xFF byte is accepted (refused at its texture where the MTL names one: the
-/// harness has no image to give), and every cut of them is taken without a panic. The
+/// harness has no image to give), and every cut of them is taken without a panic. Each
+/// scene and cut also goes through `dict_load`: as a dict's table it gets the file's
+/// verdict and picture. The
 /// twin: a cut that ends inside a table's header is refused.
 #[test]
 fn the_shipped_scenes_seed_scene_parse_and_obj_load() {
@@ -160,8 +169,15 @@ fn the_shipped_scenes_seed_scene_parse_and_obj_load() {
                         path.display()
                     ),
                 }
+                // The same scene as a dict's table: the same verdict and picture.
+                assert_eq!(
+                    dict_load(&data).is_ok(),
+                    !names_a_file,
+                    "{}",
+                    path.display()
+                );
                 tomls += 1;
-                (scene_parse, data)
+                (scene_and_dict, data)
             }
             "obj" => {
                 let mut data = std::fs::read(&path).unwrap();
@@ -189,4 +205,18 @@ fn the_shipped_scenes_seed_scene_parse_and_obj_load() {
     let bb8 = std::fs::read_to_string(scenes.join("bb8.toml")).unwrap();
     let cut = bb8.find("[camera]").unwrap() + 4;
     assert!(scene_parse(&bb8.as_bytes()[..cut]).is_err(), "the twin");
+}
+
+/// The twin of `dict_load`'s check: a table that is not the file's (bb8 with its light's
+/// red changed) is seen, and panics as a finding would.
+#[test]
+#[should_panic(expected = "render differently")]
+fn a_table_that_is_not_the_files_is_a_finding() {
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let bb8 = std::fs::read_to_string(scenes.join("bb8.toml")).unwrap();
+    let at = bb8.find("color = [").expect("bb8 has a coloured light") + "color = [".len();
+    let end = at + bb8[at..].find(',').unwrap();
+    let moved = format!("{}0.123{}", &bb8[..at], &bb8[end..]);
+    glint::fuzzing::file_and_dict_agree(&bb8, &bb8).expect("the file agrees with itself");
+    let _ = glint::fuzzing::file_and_dict_agree(&bb8, &moved);
 }
