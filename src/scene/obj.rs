@@ -132,6 +132,28 @@ pub enum ObjError {
         /// The normals defined before the face.
         defined: i64,
     },
+    /// A face corner whose texture index is not an integer (checked for files tobj reads).
+    #[error("line {line}: face texture index in {word:?} is not an index")]
+    FaceTexcoord {
+        /// The line.
+        line: u32,
+        /// The corner as written.
+        word: String,
+    },
+    /// A face's texture index names no texture coordinate (`vt`) defined before it
+    /// (checked for files tobj reads: tobj 4 multiplies an index it has not checked, and
+    /// one near 2^63 overflowed).
+    #[error(
+        "line {line}: face texture index {index} is out of range ({defined} texture coordinates (`vt`) defined before it)"
+    )]
+    TexcoordIndex {
+        /// The line.
+        line: u32,
+        /// The index as written.
+        index: i64,
+        /// The texture coordinates defined before the face.
+        defined: i64,
+    },
     /// An MTL colour (`Ka`, `Kd`, `Ks`, `Ke`) with fewer than three values (tobj 4 panics
     /// on those).
     #[error("line {line}: a colour (Ka, Kd, Ks, Ke) needs three numbers")]
@@ -156,6 +178,8 @@ impl ObjError {
             | ObjError::FaceNormal { line, .. }
             | ObjError::VertexIndex { line, .. }
             | ObjError::NormalIndex { line, .. }
+            | ObjError::FaceTexcoord { line, .. }
+            | ObjError::TexcoordIndex { line, .. }
             | ObjError::ShortColour { line } => line,
         }
     }
@@ -173,6 +197,8 @@ impl ObjError {
             | ObjError::FaceNormal { line, .. }
             | ObjError::VertexIndex { line, .. }
             | ObjError::NormalIndex { line, .. }
+            | ObjError::FaceTexcoord { line, .. }
+            | ObjError::TexcoordIndex { line, .. }
             | ObjError::ShortColour { line } => line,
         }
     }
@@ -243,6 +269,38 @@ type RawFace = ([i64; 3], u32, u32);
 /// kept only when normals are read.
 type RawNormals = ([i64; 3], u32);
 
+/// How far back a chunk's face corners reach for one kind of item (`vt`, or `vn` where
+/// normals are skipped), for a file tobj reads: a corner's index `i` needs `|i|` items
+/// defined before its face (1-based, or from the end), of which the chunk itself defined
+/// `local`; `need = |i| - local` is what the text before the chunk must have defined. Kept
+/// are the corners whose need beats every earlier one in the chunk: the first corner whose
+/// need the text before cannot meet is among them. Entries: (need, line, index, local).
+#[derive(Default)]
+struct Reach(Vec<(i64, u32, i64, u32)>);
+
+impl Reach {
+    fn push(&mut self, index: i64, local: u32, line: u32) {
+        // Index 0 (and i64::MIN, whose magnitude is no i64) is out of range whatever came
+        // before.
+        let need = match index.checked_abs() {
+            Some(m) if m > 0 => m - local as i64,
+            _ => i64::MAX,
+        };
+        if self.0.last().is_none_or(|&(n, ..)| need > n) {
+            self.0.push((need, line, index, local));
+        }
+    }
+
+    /// The first corner out of range where the text before the chunk defined `before`
+    /// items: (line within the chunk, index, items defined before its face).
+    fn first_out(&self, before: i64) -> Option<(u32, i64, i64)> {
+        self.0
+            .iter()
+            .find(|&&(need, ..)| need > before)
+            .map(|&(_, line, index, local)| (line, index, before + local as i64))
+    }
+}
+
 /// A chunk's result: its vertices (and normals), and its triangles.
 #[derive(Default)]
 struct Chunk {
@@ -253,6 +311,13 @@ struct Chunk {
     face_normals: Vec<RawNormals>,
     short_faces: Vec<u32>,
     lines: u32,
+    /// For a file tobj reads: the `vt` lines, and the `vn` lines where normals are skipped.
+    texcoords: u32,
+    skipped_normals: u32,
+    /// For a file tobj reads: how far its faces' texture indices reach, and their normal
+    /// indices where normals are skipped.
+    reach_t: Reach,
+    reach_n: Reach,
 }
 
 /// Parses `text`: `Ok(None)` when it needs tobj (materials or statements this reader does
@@ -319,13 +384,37 @@ fn join(
     // Line and vertex offsets of each chunk; the first error in file order wins.
     let mut done = Vec::with_capacity(chunks.len());
     let (mut line0, mut v0, mut n0) = (0u32, 0usize, 0usize);
+    // The first texture (or skipped normal) index out of range, for a file tobj reads.
+    let (mut t0, mut m0, mut reach_error) = (0i64, 0i64, None::<ObjError>);
     for c in chunks {
         match c {
             Ok(Some(c)) => {
+                if reach_error.is_none() {
+                    let t = c.reach_t.first_out(t0).map(|(line, index, defined)| {
+                        ObjError::TexcoordIndex {
+                            line: line0 + line,
+                            index,
+                            defined,
+                        }
+                    });
+                    let n = c.reach_n.first_out(m0).map(|(line, index, defined)| {
+                        ObjError::NormalIndex {
+                            line: line0 + line,
+                            index,
+                            defined,
+                        }
+                    });
+                    reach_error = match (t, n) {
+                        (Some(t), Some(n)) => Some(if n.line() < t.line() { n } else { t }),
+                        (t, n) => t.or(n),
+                    };
+                }
                 let offsets = (line0, v0, n0);
                 line0 += c.lines;
                 v0 += c.vertices.len();
                 n0 += c.normals.len();
+                t0 += c.texcoords as i64;
+                m0 += c.skipped_normals as i64;
                 done.push((c, offsets));
             }
             Ok(None) => return Ok(None),
@@ -411,8 +500,13 @@ fn join(
             })
             .map(|r| r.err().flatten())
             .collect();
-        if let Some(e) = errors.into_iter().flatten().next() {
-            return Err(e);
+        // The first error in file order (a position's or normal's before a texture's on
+        // one line).
+        let first = errors.into_iter().flatten().next();
+        match (first, reach_error) {
+            (Some(e), Some(r)) => return Err(if r.line() < e.line() { r } else { e }),
+            (Some(e), None) | (None, Some(e)) => return Err(e),
+            (None, None) => {}
         }
     }
     let short_faces = done
@@ -515,6 +609,28 @@ fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chun
                         word: w.to_string(),
                     })?;
                     face.push(ix);
+                    if !strict && slash.is_some() {
+                        // For tobj: the texture index, and the normal index where normals
+                        // are skipped (tobj reads them anyway), each in range.
+                        let local = c.texcoords;
+                        let mut parts = slash.map_or("", |k| &w[k + 1..]).split('/');
+                        if let Some(t) = parts.next().filter(|t| !t.is_empty()) {
+                            let t: i64 = t.parse().map_err(|_| ObjError::FaceTexcoord {
+                                line: c.lines,
+                                word: w.to_string(),
+                            })?;
+                            c.reach_t.push(t, local, c.lines);
+                        }
+                        if normals == Normals::Skip
+                            && let Some(n) = parts.next().filter(|n| !n.is_empty())
+                        {
+                            let n: i64 = n.parse().map_err(|_| ObjError::FaceNormal {
+                                line: c.lines,
+                                word: w.to_string(),
+                            })?;
+                            c.reach_n.push(n, c.skipped_normals, c.lines);
+                        }
+                    }
                     if normals == Normals::Read {
                         // The third part, after the texture index.
                         let n = match slash.and_then(|k| w[k + 1..].split('/').nth(1)) {
@@ -543,7 +659,9 @@ fn parse_chunk(text: &str, strict: bool, normals: Normals) -> Result<Option<Chun
                     }
                 }
             }
-            "vn" | "vt" | "o" | "g" | "s" => {}
+            "vt" => c.texcoords += 1,
+            "vn" => c.skipped_normals += 1,
+            "o" | "g" | "s" => {}
             k if k.starts_with('#') => {}
             _ if strict => return Ok(None),
             _ => {}
