@@ -110,10 +110,7 @@ rm -rf .cache/pyenv
 python3 -m venv .cache/pyenv
 .cache/pyenv/bin/pip install --quiet --upgrade pip
 echo "=== pass 4: pip install ./python[test], then pytest python/tests ==="
-# In cargo's dev profile, as pass 1 built: its dependencies are reused, where a release
-# build of the extension compiled them all again (2 min of CI); the tests compare bits,
-# which no profile changes.
-MATURIN_PEP517_ARGS="--profile dev" .cache/pyenv/bin/pip install --quiet "./python[test]"
+.cache/pyenv/bin/pip install --quiet "./python[test]"
 cargo build --locked --features view --quiet # the command line the tests compare with
 GLINT_BIN="$PWD/target/debug/glint" .cache/pyenv/bin/python -m pytest python/tests 2>&1 |
     tee /tmp/glint-pass4.log

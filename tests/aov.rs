@@ -428,6 +428,83 @@ fn an_exr_holds_the_colour_and_each_aov_exactly() {
     common::same_bits(&colour, memory.image.as_ref().unwrap()).unwrap();
 }
 
+/// The f32 CPU tracer streams an EXR with AOVs band by band through one band of AOVs:
+/// at a width whose bands are 32 rows (4096 pixels), 70 rows give two whole bands and a
+/// partial one; with one sample and with four (the records' path), every channel of the file
+/// equals the frame rendered whole in memory, bit for bit. The twin: the frame's rows one
+/// band down differ from the file's first rows, so a band written in the wrong place would
+/// be seen.
+#[test]
+fn a_streamed_exr_equals_the_frame_in_memory() {
+    let dir = Scratch::new("aov-exr-bands");
+    let scene = seed_scene("bb8-shadows");
+    let cpu = Renderer::new(Backend::Cpu).unwrap();
+    let (w, h) = (4096usize, 70usize);
+    for samples in [1, 2] {
+        let options = RenderOptions {
+            size: Some((w as u32, h as u32)),
+            samples: Some(samples),
+            aovs: Aov::ALL.to_vec(),
+            ..RenderOptions::default()
+        };
+        let path = dir.join(format!("out{samples}.exr"));
+        let run = |output| {
+            Job::borrowed(&scene, output)
+                .options(options.clone())
+                .run(&cpu)
+                .unwrap_or_else(|e| panic!("{e}"))
+        };
+        run(Output::file(&path).unwrap());
+        let memory = run(Output::Memory);
+        let a = memory.aovs.unwrap();
+        let file = exr::prelude::read_all_flat_layers_from_file(&path).unwrap();
+        let layer = &file.layer_data[0];
+        let (mut checked, mut shifted_differs) = (0, false);
+        for c in &layer.channel_data.list {
+            let name = c.name.to_string();
+            let got: Vec<u32> = match &c.sample_data {
+                exr::prelude::FlatSamples::F32(v) => v.iter().map(|x| x.to_bits()).collect(),
+                exr::prelude::FlatSamples::U32(v) => v.clone(),
+                exr::prelude::FlatSamples::F16(_) => panic!("{name}: half floats"),
+            };
+            let want: Vec<u32> = match name.as_str() {
+                "R" | "G" | "B" | "A" => {
+                    let k = ["R", "G", "B", "A"]
+                        .iter()
+                        .position(|n| *n == name)
+                        .unwrap();
+                    let img = memory.image.as_ref().unwrap();
+                    img.pixels.iter().map(|p| p[k].to_bits()).collect()
+                }
+                _ => {
+                    let (aov, k) = Aov::ALL
+                        .iter()
+                        .find_map(|&aov| {
+                            let names = aov.channel_names();
+                            names.iter().position(|n| *n == name).map(|k| (aov, k))
+                        })
+                        .unwrap_or_else(|| panic!("channel {name}"));
+                    match &a.channels(aov)[k].1 {
+                        glint::image::ChannelData::F32(v) => {
+                            v.iter().map(|x| x.to_bits()).collect()
+                        }
+                        glint::image::ChannelData::U32(v) => v.to_vec(),
+                    }
+                }
+            };
+            assert!(got == want, "samples {samples}: channel {name} differs");
+            shifted_differs |= got[..32 * w] != want[32 * w..64 * w];
+            checked += 1;
+        }
+        assert!(shifted_differs, "the twin: the second band is the first's");
+        let channels = Aov::ALL
+            .iter()
+            .map(|a| a.channel_names().len())
+            .sum::<usize>();
+        assert_eq!(checked, 4 + channels);
+    }
+}
+
 /// A PNG render writes one PNG per AOV beside the colour's, mapped as docs/aov.md says; a
 /// `position` AOV is refused before any file is made, naming the output.
 #[test]

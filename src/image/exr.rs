@@ -30,6 +30,8 @@ pub struct ExrStream {
     width: u32,
     height: u32,
     next_row: u32,
+    /// The bytes of one row's pixels: 4 a channel a pixel.
+    row_size: u64,
     row: Vec<u8>,
 }
 
@@ -84,21 +86,35 @@ fn preamble(width: u32, height: u32, channels: &[(&str, i32)]) -> Vec<u8> {
     out
 }
 
-/// The pixel bytes of one row: four channels of `width` f32.
-fn row_bytes(width: u32) -> u64 {
-    16 * width as u64
-}
-
 impl ExrStream {
-    /// Starts `path` (a `.exr`) for a `width`×`height` image. A row is at most 2^31 bytes
-    /// (the block's size is an i32), far above glint's largest side.
+    /// Starts `path` (a `.exr`) for a `width`×`height` image of `[r, g, b, t]` pixels
+    /// ([`ExrStream::write_rows`]). A row is at most 2^31 bytes (the block's size is an
+    /// i32), far above glint's largest side.
     pub fn create(path: &Path, width: u32, height: u32) -> Result<ExrStream, ImageError> {
+        ExrStream::create_channels(path, width, height, &CHANNELS.map(|(n, _)| (n, false)))
+    }
+
+    /// Starts `path` (a `.exr`) for a `width`×`height` image of `channels` (name, and
+    /// whether it holds 32-bit unsigned integers rather than 32-bit floats), which must be
+    /// sorted by name, as the file stores them; rows go in by [`ExrStream::write_row_with`].
+    pub fn create_channels(
+        path: &Path,
+        width: u32,
+        height: u32,
+        channels: &[(&str, bool)],
+    ) -> Result<ExrStream, ImageError> {
         if format_of(path)? != Format::Exr {
             return Err(ImageError::Extension(path.to_owned()));
         }
+        debug_assert!(
+            channels
+                .windows(2)
+                .all(|p| p[0].0.as_bytes() < p[1].0.as_bytes())
+        );
         let target = write_target(path);
         let tmp = temp_path(&target, "tmp");
         set_pending(Some(tmp.clone()));
+        let row_size = 4 * width as u64 * channels.len() as u64;
         let mut stream = ExrStream {
             path: path.to_owned(),
             target,
@@ -107,14 +123,42 @@ impl ExrStream {
             width,
             height,
             next_row: 0,
-            row: Vec::with_capacity(8 + row_bytes(width) as usize),
+            row_size,
+            row: Vec::with_capacity(8 + row_size as usize),
         };
+        let kinds: Vec<(&str, i32)> = channels
+            .iter()
+            .map(|&(n, uint)| (n, if uint { UINT } else { FLOAT }))
+            .collect();
         let file = std::fs::File::create(&stream.tmp).map_err(|e| stream.io(e))?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
-        w.write_all(&preamble(width, height, &CHANNELS.map(|(n, _)| (n, FLOAT))))
+        w.write_all(&preamble(width, height, &kinds))
             .map_err(|e| stream.io(e))?;
         stream.writer = Some(w);
         Ok(stream)
+    }
+
+    /// Appends the next row: `put` appends each channel's `width` values, in the file's
+    /// channel order, as little-endian bytes (4 a value).
+    pub fn write_row_with(&mut self, put: impl FnOnce(&mut Vec<u8>)) -> Result<(), ImageError> {
+        if self.next_row >= self.height {
+            return Err(self.io(std::io::Error::other("more rows than the image holds")));
+        }
+        self.row.clear();
+        self.row
+            .extend_from_slice(&(self.next_row as i32).to_le_bytes());
+        self.row
+            .extend_from_slice(&(self.row_size as i32).to_le_bytes());
+        put(&mut self.row);
+        if self.row.len() as u64 != 8 + self.row_size {
+            return Err(self.io(std::io::Error::other("a row of the wrong length")));
+        }
+        let writer = self.writer.as_mut().expect("not finished");
+        if let Err(e) = writer.write_all(&self.row) {
+            return Err(self.io(e));
+        }
+        self.next_row += 1;
+        Ok(())
     }
 
     fn io(&self, error: std::io::Error) -> ImageError {
@@ -132,21 +176,13 @@ impl ExrStream {
             if self.next_row >= self.height || line.len() != w {
                 return Err(self.io(std::io::Error::other("more pixels than the image holds")));
             }
-            self.row.clear();
-            self.row
-                .extend_from_slice(&(self.next_row as i32).to_le_bytes());
-            self.row
-                .extend_from_slice(&(row_bytes(self.width) as i32).to_le_bytes());
-            for (_, c) in CHANNELS {
-                for p in line {
-                    self.row.extend_from_slice(&p[c].to_le_bytes());
+            self.write_row_with(|row| {
+                for (_, c) in CHANNELS {
+                    for p in line {
+                        row.extend_from_slice(&p[c].to_le_bytes());
+                    }
                 }
-            }
-            let writer = self.writer.as_mut().expect("not finished");
-            if let Err(e) = writer.write_all(&self.row) {
-                return Err(self.io(e));
-            }
-            self.next_row += 1;
+            })?;
         }
         Ok(())
     }
@@ -193,7 +229,7 @@ impl ChannelData<'_> {
     }
 
     /// The little-endian bytes of pixels `range`.
-    fn extend_row(&self, out: &mut Vec<u8>, range: std::ops::Range<usize>) {
+    pub(crate) fn extend_row(&self, out: &mut Vec<u8>, range: std::ops::Range<usize>) {
         let words: &[u32] = match self {
             ChannelData::F32(v) => bytemuck::cast_slice(&v[range]),
             ChannelData::U32(v) => &v[range],

@@ -212,6 +212,15 @@ impl IdMap {
     }
 }
 
+/// Where a channel of an EXR with AOVs comes from ([`AovImage::exr_layout`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ExrSource {
+    /// Component `c` of the colour's `[r, g, b, t]`.
+    Colour(usize),
+    /// The frame's plane `k` (the AOVs' channels in the order held).
+    Plane(usize),
+}
+
 /// A frame of AOVs, row-major, top row first: the AOVs asked for, each as planes of its
 /// channels (one a component), so a frame holds only what was asked (depth, normal and
 /// three ids: 28 bytes a pixel, where the shader's whole record is 64). The planes share
@@ -422,6 +431,53 @@ impl AovImage {
             out.extend(self.channels(a));
         }
         out
+    }
+
+    /// The channels of an EXR of the colour and this frame's AOVs, in the file's order
+    /// (sorted by name): each name, whether it holds ids (u32), and where its values
+    /// come from. What [`AovImage::exr_row`] writes a row of.
+    pub(crate) fn exr_layout(&self) -> Vec<(String, bool, ExrSource)> {
+        let mut out: Vec<(String, bool, ExrSource)> = ["R", "G", "B", "A"]
+            .iter()
+            .enumerate()
+            .map(|(c, n)| (n.to_string(), false, ExrSource::Colour(c)))
+            .collect();
+        let mut plane = 0;
+        for &a in &self.aovs {
+            for name in a.channel_names() {
+                out.push((name, a.is_id(), ExrSource::Plane(plane)));
+                plane += 1;
+            }
+        }
+        out.sort_by(|a, b| a.0.as_bytes().cmp(b.0.as_bytes()));
+        out
+    }
+
+    /// Appends row `r` of this frame, with `colour` (that row's `[r, g, b, t]` pixels),
+    /// as an EXR row of `layout` ([`AovImage::exr_layout`]): each channel's values as
+    /// little-endian bytes, in the layout's order.
+    pub(crate) fn exr_row(
+        &self,
+        layout: &[(String, bool, ExrSource)],
+        colour: &[[f32; 4]],
+        r: usize,
+        out: &mut Vec<u8>,
+    ) {
+        let (w, n) = (
+            self.width as usize,
+            self.width as usize * self.height as usize,
+        );
+        for (_, _, source) in layout {
+            match *source {
+                ExrSource::Colour(c) => colour
+                    .iter()
+                    .for_each(|p| out.extend_from_slice(&p[c].to_le_bytes())),
+                ExrSource::Plane(k) => {
+                    let row = &self.data[k * n + r * w..k * n + (r + 1) * w];
+                    ChannelData::U32(row.into()).extend_row(out, 0..w);
+                }
+            }
+        }
     }
 
     /// Writes each AOV of the frame to its PNG beside `colour` ([`AovImage::png_path`]), each

@@ -216,6 +216,9 @@ struct Run<'j, 'a> {
     /// The frame's AOVs, which the f32 CPU tracer writes as it traces the colour (`None`:
     /// no AOVs asked for).
     aov_frame: Option<AovImage>,
+    /// Whether `aov_frame` is one band, rewritten for each band and streamed with the
+    /// colour to an EXR (the f32 CPU tracer's, to an EXR), not the whole frame.
+    aov_band: bool,
 }
 
 impl Run<'_, '_> {
@@ -323,6 +326,7 @@ impl<'a> Job<'a> {
             cancel: cancel.as_deref(),
             stages: Stages::new(),
             aov_frame: None,
+            aov_band: false,
         };
         let (mut owned, borrowed) = match scene {
             Source::Owned(s) => (Some(s), None),
@@ -333,7 +337,12 @@ impl<'a> Job<'a> {
         }
         let (w, h, algo) = prepare(pick(&owned, borrowed), &output, &options, &mut run)?;
         let aovs = options.aovs.clone();
-        check_aov_output(&output, &aovs, w, h)?;
+        // The f32 CPU tracer makes the colour and AOVs at once: to an EXR, both are
+        // streamed band by band.
+        let band = matches!(output, Output::Exr(_))
+            && !aovs.is_empty()
+            && matches!(renderer.tracer(), Tracer::Cpu);
+        check_aov_output(&output, &aovs, w, h, band)?;
         // Only the f64 tracer reads the scene's primitives once they are flat, so the
         // others take them from a scene of the job's own (the dragon's are 35 MB, a sixth
         // of the former peak).
@@ -368,18 +377,29 @@ impl<'a> Job<'a> {
         if let Some(note) = renderer.note() {
             run.note(Note::Backend(note.to_string()));
         }
-        // An EXR with AOVs is written whole once they are traced (its rows interleave the
-        // colour's channels and theirs).
+        // An EXR's rows interleave the colour's channels and the AOVs': the f32 CPU tracer
+        // streams them through one band of AOVs, rewritten for each band (its memory
+        // touched once, not a whole frame's); the other tracers trace the AOVs after the
+        // colour, so their EXR is written whole at the end.
         let to_sink = match &output {
-            Output::Exr(_) if !aovs.is_empty() => Output::Memory,
+            Output::Exr(_) if !aovs.is_empty() && !band => Output::Memory,
             o => o.clone(),
         };
-        let mut sink = Sink::open(&to_sink, w, h, scene.encoding)?;
         let math = options.math_mode();
         let keep_geometry = keep || !aovs.is_empty();
         if !aovs.is_empty() {
-            run.aov_frame = Some(AovImage::new(w, h, &aovs, IdMap::new(scene)));
+            let rows = if band {
+                band_rows(w, h, CPU_BAND_MIB)
+            } else {
+                h
+            };
+            run.aov_frame = Some(AovImage::new(w, rows, &aovs, IdMap::new(scene)));
+            run.aov_band = band;
         }
+        let mut sink = match (&output, &run.aov_frame) {
+            (Output::Exr(p), Some(a)) if band => Sink::open_exr_aov(p, w, h, a)?,
+            _ => Sink::open(&to_sink, w, h, scene.encoding)?,
+        };
         let traced = trace(
             renderer,
             scene,
@@ -394,7 +414,7 @@ impl<'a> Job<'a> {
         }
         let mut aov_image = None;
         let mut aov_files = Vec::new();
-        if let Some(mut a) = run.aov_frame.take() {
+        if let Some(mut a) = run.aov_frame.take().filter(|_| !run.aov_band) {
             // The f32 CPU tracer wrote them with the colour, from the same camera rays.
             if traced.tracer != TracerKind::CpuF32 {
                 let spec = Specialisation::for_scene(buf).with_math(math);
@@ -488,7 +508,13 @@ fn prepare(
 
 /// Checks, before any work, that `aovs` can go to `output` (a PNG's AOVs each to a PNG of
 /// its own, which must be writable) and that the frame of them fits in memory.
-fn check_aov_output(output: &Output, aovs: &[Aov], w: u32, h: u32) -> Result<(), RenderError> {
+fn check_aov_output(
+    output: &Output,
+    aovs: &[Aov],
+    w: u32,
+    h: u32,
+    band: bool,
+) -> Result<(), RenderError> {
     if aovs.is_empty() {
         return Ok(());
     }
@@ -499,10 +525,15 @@ fn check_aov_output(output: &Output, aovs: &[Aov], w: u32, h: u32) -> Result<(),
         }
     }
     // The AOVs' planes (4 bytes a channel), the colour held whole, and an EXR's copy of
-    // its channels R, G, B, A.
+    // its channels R, G, B, A; a band of planes and colour where they are streamed.
     let channels: usize = aovs.iter().map(|a| a.channel_names().len()).sum();
     let per_pixel = 4 * channels as u64 + 16 + 16;
-    super::check_memory(w, h, w as u64 * h as u64 * per_pixel)?;
+    let rows = if band {
+        band_rows(w, h, CPU_BAND_MIB)
+    } else {
+        h
+    };
+    super::check_memory(w, h, w as u64 * rows as u64 * per_pixel)?;
     Ok(())
 }
 
@@ -621,12 +652,18 @@ fn cpu_bands(
             (Some(s), _) => crate::cpu::render_f64_rows(s, buf, spec, y, rows),
             (None, None) => crate::cpu::render_f32_rows(buf, spec, y, rows),
             (None, Some(aovs)) => {
-                let blocks = aovs.blocks(y, rows, crate::cpu::packet::PACKET_H);
+                let at = if run.aov_band { 0 } else { y };
+                let blocks = aovs.blocks(at, rows, crate::cpu::packet::PACKET_H);
                 crate::cpu::render_f32_rows_aov(buf, spec, y, rows, blocks)
             }
         };
         frame += t.elapsed();
-        run.stages.time("encode", || sink.write_rows(&px))?;
+        match run.aov_frame.as_ref().filter(|_| run.aov_band) {
+            Some(band) => run
+                .stages
+                .time("encode", || sink.write_rows_aov(&px, band))?,
+            None => run.stages.time("encode", || sink.write_rows(&px))?,
+        }
         y += rows;
         (run.events)(Event::Rows { done: y, total: h });
     }
@@ -672,7 +709,7 @@ fn gpu_bands(
                 band,
                 &mut |y, px| rows(y, px.len(), &mut || png.write_rgba8_rows(px)),
             ),
-        Sink::Png(..) | Sink::Exr(..) | Sink::Frame(..) => {
+        Sink::Png(..) | Sink::Exr(..) | Sink::ExrAov(..) | Sink::Frame(..) => {
             kernel.render_bands(&gpu.device, &gpu.queue, buf, spec, band, &mut |y, px| {
                 rows(y, px.len(), &mut || sink.write_rows(px))
             })

@@ -2,6 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::aov::{AovImage, ExrSource};
 use crate::image::{Encoding, ExrStream, Format, Image, ImageError, PngStream};
 
 /// Where a render's pixels go.
@@ -59,6 +60,9 @@ pub(crate) enum Sink {
     Exr(Box<ExrStream>),
     /// The frame, and how many of its pixels are written.
     Frame(Image, usize),
+    /// An EXR of the colour and AOVs, written band by band as the CPU tracer makes them:
+    /// the writer, and where each of its channels comes from.
+    ExrAov(Box<ExrStream>, Vec<(String, bool, ExrSource)>),
 }
 
 impl Sink {
@@ -78,11 +82,42 @@ impl Sink {
         })
     }
 
+    /// Opens the EXR `path` for a `w`×`h` frame of colour and the AOVs `aovs` holds
+    /// (a band of them: [`Sink::write_rows_aov`]).
+    pub(crate) fn open_exr_aov(
+        path: &Path,
+        w: u32,
+        h: u32,
+        aovs: &AovImage,
+    ) -> Result<Sink, ImageError> {
+        let layout = aovs.exr_layout();
+        let names: Vec<(&str, bool)> = layout.iter().map(|(n, u, _)| (n.as_str(), *u)).collect();
+        let stream = ExrStream::create_channels(path, w, h, &names)?;
+        Ok(Sink::ExrAov(Box::new(stream), layout))
+    }
+
+    /// Appends the next rows: `px`, f32 pixels, with the same rows of AOVs from the top of
+    /// `band` (an [`Sink::ExrAov`]; another sink takes the colour alone).
+    pub(crate) fn write_rows_aov(
+        &mut self,
+        px: &[[f32; 4]],
+        band: &AovImage,
+    ) -> Result<(), ImageError> {
+        let Sink::ExrAov(e, layout) = self else {
+            return self.write_rows(px);
+        };
+        let w = (band.width as usize).max(1);
+        for (r, line) in px.chunks(w).enumerate() {
+            e.write_row_with(|out| band.exr_row(layout, line, r, out))?;
+        }
+        Ok(())
+    }
+
     /// Appends the next rows of f32 pixels.
     pub(crate) fn write_rows(&mut self, px: &[[f32; 4]]) -> Result<(), ImageError> {
         match self {
             Sink::Png(p) => p.write_rows(px),
-            Sink::Exr(e) => e.write_rows(px),
+            Sink::Exr(e) | Sink::ExrAov(e, _) => e.write_rows(px),
             Sink::Frame(img, at) => {
                 img.pixels[*at..*at + px.len()].copy_from_slice(px);
                 *at += px.len();
@@ -95,7 +130,7 @@ impl Sink {
     pub(crate) fn finish(self) -> Result<Option<Image>, ImageError> {
         match self {
             Sink::Png(p) => p.finish().map(|_| None),
-            Sink::Exr(e) => e.finish().map(|_| None),
+            Sink::Exr(e) | Sink::ExrAov(e, _) => e.finish().map(|_| None),
             Sink::Frame(img, _) => Ok(Some(img)),
         }
     }
