@@ -9,6 +9,10 @@
 //        "scenes/edited.toml")
 //   window.glint.compare(a, b) -> { pixels, differing, beyondOne, maxDiff }
 //   window.glint.gpuStatus     -> the adapter, or why there is no WebGPU
+//   window.glint.fetchTimeoutMs (read and set; default 15000): a file the scene names that
+//        does not arrive in time is given up, and the render's error says so
+// A scene text over MAX_SCENE_BYTES is refused with an error naming its size; on an error
+// the page keeps the last good pictures, dimmed, under the message.
 import init, {
   Files,
   GpuRenderer,
@@ -20,7 +24,11 @@ import init, {
 const $ = (id) => document.getElementById(id);
 const DEFAULT_PATH = "scenes/edited.toml";
 let files = null; // the wasm module's file table, once init() has run
-const unavailable = new Set(); // paths whose fetch failed: asked once
+const unavailable = new Map(); // path -> why its fetch failed: asked once
+let fetchTimeoutMs = 15000;
+// The largest scene text the page takes: the editor and the tracers run in the page's own
+// thread, and a larger text is a scene for the command line.
+const MAX_SCENE_BYTES = 4 << 20;
 let gpu = null;
 let gpuStatus = "";
 
@@ -31,29 +39,53 @@ async function fetchNeeded(toml, path) {
     const need = needed_files(toml, path, files).filter((p) => !unavailable.has(p));
     if (need.length === 0) return;
     await Promise.all(need.map(async (p) => {
+      const abort = new AbortController();
+      const ms = fetchTimeoutMs;
+      const timer = setTimeout(() => abort.abort(), ms);
       try {
-        const r = await fetch(p);
-        if (!r.ok) throw new Error(String(r.status));
+        const r = await fetch(p, { signal: abort.signal });
+        if (!r.ok) throw new Error(`HTTP ${r.status}`);
         files.add(p, new Uint8Array(await r.arrayBuffer()));
-      } catch {
-        unavailable.add(p);
+      } catch (e) {
+        unavailable.set(p, abort.signal.aborted ? `no answer in ${ms / 1000} s` : String(e.message ?? e));
+      } finally {
+        clearTimeout(timer);
       }
     }));
   }
 }
 
+// `e` with, for each file it says the page lacks, why fetching that file failed.
+function withFetchReasons(e) {
+  if (e instanceof WebAssembly.RuntimeError) return e;
+  let m = String(e?.message ?? e);
+  for (const [p, why] of unavailable) {
+    if (m.includes(`${p} is not loaded`)) m += ` (fetching ${p}: ${why})`;
+  }
+  return new Error(m);
+}
+
 async function render(toml, options = {}) {
   const backend = options.backend ?? "gpu";
   const path = options.path ?? DEFAULT_PATH;
+  const bytes = new TextEncoder().encode(toml).length;
+  if (bytes > MAX_SCENE_BYTES) {
+    throw new Error(`${path}: the scene text is ${(bytes / 2 ** 20).toFixed(1)} MiB; the page ` +
+      `takes scenes up to ${MAX_SCENE_BYTES / 2 ** 20} MiB (glint render has no such limit)`);
+  }
   await fetchNeeded(toml, path);
   let r;
-  if (backend === "cpu") {
-    r = render_cpu(toml, path, files);
-  } else if (backend === "gpu") {
-    if (!gpu) throw new Error(gpuStatus);
-    r = await gpu.render(toml, path, files);
-  } else {
-    throw new Error(`unknown backend ${JSON.stringify(backend)}: "gpu" or "cpu"`);
+  try {
+    if (backend === "cpu") {
+      r = render_cpu(toml, path, files);
+    } else if (backend === "gpu") {
+      if (!gpu) throw new Error(gpuStatus);
+      r = await gpu.render(toml, path, files);
+    } else {
+      throw new Error(`unknown backend ${JSON.stringify(backend)}: "gpu" or "cpu"`);
+    }
+  } catch (e) {
+    throw withFetchReasons(e);
   }
   const out = { width: r.width, height: r.height, rgba: r.rgba, ms: r.ms };
   r.free();
@@ -116,22 +148,30 @@ async function update() {
   }
   if (mine !== generation) return;
   $("error").textContent = error;
+  // Where a render failed, its last good picture stays, dimmed.
+  $("cpu-image").classList.toggle("stale", !cpu);
+  $("gpu-image").classList.toggle("stale", gpu !== null && !gpuImage);
+  $("diff-image").classList.toggle("stale", error !== "");
   if (cpu) {
     draw($("cpu-image"), cpu.width, cpu.height, cpu.rgba);
     $("cpu-time").textContent = `${cpu.ms.toFixed(1)} ms`;
   } else {
-    clear($("cpu-image"));
-    $("cpu-time").textContent = "";
+    $("cpu-time").textContent = "(the last good picture)";
   }
   if (gpuImage) {
     draw($("gpu-image"), gpuImage.width, gpuImage.height, gpuImage.rgba);
     $("gpu-time").textContent = `${gpuImage.ms.toFixed(1)} ms`;
-  } else {
+  } else if (!gpu) {
     clear($("gpu-image"));
-    $("gpu-time").textContent = gpu ? "" : "(no WebGPU)";
+    $("gpu-time").textContent = "(no WebGPU)";
+  } else {
+    $("gpu-time").textContent = "(the last good picture)";
   }
   const verdict = $("verdict");
-  if (cpu && gpuImage) {
+  if (error) {
+    verdict.textContent = "";
+    verdict.className = "";
+  } else if (cpu && gpuImage) {
     const c = compare(gpuImage, cpu);
     draw($("diff-image"), cpu.width, cpu.height, c.map);
     if (c.differing === 0) {
@@ -146,7 +186,7 @@ async function update() {
     }
   } else {
     clear($("diff-image"));
-    verdict.textContent = cpu ? "CPU image only (no GPU image to compare)" : "";
+    verdict.textContent = "CPU image only (no GPU image to compare)";
     verdict.className = "";
   }
 }
@@ -184,6 +224,8 @@ async function main() {
       return counts;
     },
     get gpuStatus() { return gpuStatus; },
+    get fetchTimeoutMs() { return fetchTimeoutMs; },
+    set fetchTimeoutMs(ms) { fetchTimeoutMs = ms; },
     hasGpu: gpu !== null,
   };
   const index = await (await fetch("scenes/index.json")).json();

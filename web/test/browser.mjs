@@ -33,7 +33,9 @@ const TYPES = {
   ".png": "image/png", ".jpg": "image/jpeg", ".toml": "text/plain",
 };
 const root = resolve(dist);
+// A URL under /never/ is never answered: a server that hangs, for the page's fetch timeout.
 const server = createServer((req, res) => {
+  if (new URL(req.url, "http://x").pathname.startsWith("/never/")) return;
   const path = normalize(join(root, decodeURIComponent(new URL(req.url, "http://x").pathname)));
   let file = path;
   try {
@@ -67,6 +69,7 @@ const failed = (why) => {
 };
 function finish(code) {
   try { browser.kill("SIGKILL"); } catch {}
+  server.closeAllConnections();
   server.close();
   try { rmSync(profile, { recursive: true, force: true }); } catch {}
   process.exit(code);
@@ -155,19 +158,25 @@ for (const q of requests) {
       results[q.name] = { screenshot: `${q.name}.png` };
     } else if (q.edit !== undefined) {
       // Type into the editor as a user would (an input event), then wait for the page's
-      // answer: the error under the editor, or the verdict, whichever changes.
+      // answer: the error under the editor, or the verdict, whichever changes; with the
+      // CPU picture's size and whether it is dimmed as stale, and the seconds it took.
       results[q.name] = await evaluate(`(async () => {
+        ${q.fetchTimeoutMs !== undefined ? `glint.fetchTimeoutMs = ${q.fetchTimeoutMs};` : ""}
         const ed = document.getElementById("editor");
         document.getElementById("error").textContent = "";
         document.getElementById("verdict").textContent = "";
-        ed.value = ${JSON.stringify(q.edit)};
+        ed.value = ${JSON.stringify(q.edit)} + ("# " + "x".repeat(77) + "\\n").repeat(${Math.ceil((q.pad ?? 0) / 80)});
         ed.dispatchEvent(new Event("input"));
         const t0 = performance.now();
         while (performance.now() - t0 < 60000) {
           await new Promise((r) => setTimeout(r, 50));
           const shownError = document.getElementById("error").textContent;
           const verdict = document.getElementById("verdict").textContent;
-          if (shownError || verdict) return { shownError, verdict };
+          if (shownError || verdict) {
+            const c = document.getElementById("cpu-image");
+            return { shownError, verdict, cpuSize: [c.width, c.height],
+              stale: c.classList.contains("stale"), seconds: (performance.now() - t0) / 1000 };
+          }
         }
         return { shownError: "", verdict: "", timedOut: true };
       })()`);
