@@ -96,25 +96,13 @@ fn run(cli: Cli) -> Result<Verdict> {
                     };
                     let to = (template.as_path(), range, resume);
                     done(render_frames(
-                        &scene,
-                        to,
-                        chatter,
-                        backend.into(),
-                        no_cache,
-                        frame,
-                        common,
+                        &scene, to, chatter, backend, no_cache, frame, common,
                     ))
                 }
                 None => {
                     let output = output.unwrap_or_else(|| default_output(&scene));
                     done(render(
-                        &scene,
-                        &output,
-                        chatter,
-                        backend.into(),
-                        no_cache,
-                        frame,
-                        common,
+                        &scene, &output, chatter, backend, no_cache, frame, common,
                     ))
                 }
             }
@@ -160,7 +148,7 @@ fn run(cli: Cli) -> Result<Verdict> {
             common,
         } => done(cli::view::run(cli::view::Options {
             scene,
-            backend: backend.into(),
+            backend,
             size,
             samples,
             frames,
@@ -638,29 +626,4 @@ fn bench(
         out.display()
     );
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::cli::args::Backend;
-    use clap::ValueEnum;
-
-    /// The command line's backend names are the library's (`glint::Backend::NAMES`), each
-    /// for the same backend, so `--backend` and a library user name a backend one way.
-    #[test]
-    fn cli_backend_names_are_the_librarys() {
-        for b in Backend::value_variants() {
-            let name = b
-                .to_possible_value()
-                .expect("a visible value")
-                .get_name()
-                .to_string();
-            assert_eq!(
-                name.parse::<glint::Backend>(),
-                Ok(glint::Backend::from(*b)),
-                "{name}"
-            );
-        }
-        assert_eq!(Backend::value_variants().len(), glint::Backend::NAMES.len());
-    }
 }

@@ -40,14 +40,11 @@ fn _compare_on<'py>(
     let scene = scene_arg(py, scene)?;
     let options = render::options(size, samples, triangle, max_depth, math)?;
     let inner = renderer.inner()?;
-    let gpu = match inner.tracer() {
-        glint::Tracer::Gpu(g) | glint::Tracer::GpuRq(g) => g,
-        _ => {
-            return Err(PyValueError::new_err(format!(
-                "compare needs a GPU renderer; this one is {:?}",
-                inner.backend().name()
-            )));
-        }
+    let Some(gpu) = inner.tracer().gpu() else {
+        return Err(PyValueError::new_err(format!(
+            "compare needs a GPU renderer; this one is {:?}",
+            inner.backend().name()
+        )));
     };
     let s = scene.get().state();
     let dict_source = s.is_from_dict();

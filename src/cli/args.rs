@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Parser, Subcommand};
 use glint::scene::TriangleAlgorithm;
 
 /// `glint`'s arguments.
@@ -19,37 +19,6 @@ pub struct Cli {
     /// per core).
     #[arg(long, global = true, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub threads: Option<u32>,
-}
-
-impl From<Backend> for glint::Backend {
-    fn from(b: Backend) -> glint::Backend {
-        match b {
-            Backend::Auto => glint::Backend::Auto,
-            Backend::Gpu => glint::Backend::Gpu,
-            Backend::GpuRq => glint::Backend::GpuRq,
-            Backend::Cpu => glint::Backend::Cpu,
-            Backend::CpuF64 => glint::Backend::CpuF64,
-        }
-    }
-}
-
-/// `--backend`: the library's [`glint::Backend`] by its names.
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Backend {
-    /// A real GPU when there is one; the CPU tracer when the only adapters are CPU Vulkan
-    /// implementations (lavapipe: slower than the CPU tracer for every whole render measured) or
-    /// there is none (said in one line); the CPU tracer too when the scene exceeds the GPU's
-    /// buffers.
-    Auto,
-    /// The WGSL compute shader through wgpu (Vulkan).
-    Gpu,
-    /// The shader with the triangles traced by the driver's ray queries (VK_KHR_ray_query:
-    /// ray-tracing GPUs, Mesa ≥ 24.1's lavapipe); an error where there are none.
-    GpuRq,
-    /// The f32 CPU mirror of the shader.
-    Cpu,
-    /// The f64 CPU ground truth.
-    CpuF64,
 }
 
 /// The options every subcommand that loads a scene shares.
@@ -152,7 +121,7 @@ pub enum Command {
         quiet: bool,
         /// Which tracer.
         #[arg(long, value_enum, default_value = "auto")]
-        backend: Backend,
+        backend: glint::Backend,
         /// A PNG's bytes: linear or srgb (the sRGB curve); default: the scene's
         /// `[output] encoding`, else linear. Short for `--set output.encoding=...`.
         #[arg(long, value_parser = ["linear", "srgb"])]
@@ -201,7 +170,7 @@ pub enum Command {
         scene: PathBuf,
         /// Which tracer (auto: a real GPU where there is one, else the CPU tracer).
         #[arg(long, value_enum, default_value = "auto")]
-        backend: Backend,
+        backend: glint::Backend,
         /// Window size WxH (default: the scene's camera).
         #[arg(long, value_parser = parse_size)]
         size: Option<(u32, u32)>,

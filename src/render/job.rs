@@ -547,14 +547,10 @@ fn trace_aovs(
     spec: Specialisation,
     frame: &mut AovImage,
 ) -> Result<(), RenderError> {
-    let gpu = match renderer.tracer() {
-        Tracer::Gpu(g) | Tracer::GpuRq(g) => Some(g),
-        _ => None,
-    };
-    let kernel = match (tracer, gpu) {
-        (TracerKind::Gpu, Some(g)) => Some((g, g.compute_kernel(spec)?)),
-        (TracerKind::GpuRq, Some(g)) => Some((g, g.ray_query_kernel()?)),
-        _ => None,
+    // The renderer's GPU kernel, unless `auto` fell back to the CPU.
+    let kernel = match tracer == renderer.tracer().kind() {
+        true => renderer.tracer().kernel(spec)?,
+        false => None,
     };
     let Some((gpu, kernel)) = kernel else {
         let f64_scene = (tracer == TracerKind::CpuF64).then_some(scene);

@@ -162,22 +162,21 @@ impl Live {
         }
         let t0 = Instant::now();
         let total = self.total();
+        if let Some((gpu, kernel)) = renderer.tracer().kernel(self.spec)? {
+            kernel.render_into(
+                &gpu.device,
+                &gpu.queue,
+                &self.buf,
+                self.spec,
+                &mut self.image,
+                &mut |_, _| {},
+            )?;
+            self.done = total;
+            self.last = t0.elapsed();
+            return Ok(());
+        }
         match renderer.tracer() {
-            Tracer::Gpu(gpu) | Tracer::GpuRq(gpu) => {
-                let kernel = match renderer.tracer() {
-                    Tracer::GpuRq(_) => gpu.ray_query_kernel()?,
-                    _ => gpu.compute_kernel(self.spec)?,
-                };
-                kernel.render_into(
-                    &gpu.device,
-                    &gpu.queue,
-                    &self.buf,
-                    self.spec,
-                    &mut self.image,
-                    &mut |_, _| {},
-                )?;
-                self.done = total;
-            }
+            Tracer::Gpu(_) | Tracer::GpuRq(_) => {} // traced above
             Tracer::CpuF64 => {
                 self.image = crate::cpu::render_f64(&self.scene, &self.buf, self.spec);
                 self.done = total;
@@ -211,22 +210,17 @@ impl Live {
         renderer: &Renderer,
         texture: &wgpu::Texture,
     ) -> Result<bool, RenderError> {
-        let gpu = match renderer.tracer() {
-            Tracer::Gpu(g) | Tracer::GpuRq(g) => g,
-            _ => {
-                self.step(renderer)?;
-                return Ok(false);
-            }
+        let Some(gpu) = renderer.tracer().gpu() else {
+            self.step(renderer)?;
+            return Ok(false);
         };
         if self.converged() {
             return Ok(true);
         }
         let t0 = Instant::now();
-        if self.resident.is_none() {
-            let kernel = match renderer.tracer() {
-                Tracer::GpuRq(_) => gpu.ray_query_kernel()?,
-                _ => gpu.compute_kernel(self.spec)?,
-            };
+        if self.resident.is_none()
+            && let Some((_, kernel)) = renderer.tracer().kernel(self.spec)?
+        {
             self.resident = Some(kernel.resident(&gpu.device, &gpu.queue, &self.buf, self.spec)?);
         }
         let resident = self.resident.as_ref().expect("made above");

@@ -9,7 +9,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use crate::gpu::{Gpu, GpuError, GpuOptions, is_cpu_adapter};
+use crate::gpu::{Gpu, GpuError, GpuOptions, Kernel, is_cpu_adapter};
 use crate::image::Image;
 use crate::scene::{Scene, TriangleAlgorithm};
 
@@ -50,6 +50,34 @@ impl Backend {
     /// This backend's name.
     pub fn name(self) -> &'static str {
         Backend::NAMES[Backend::ALL.iter().position(|&b| b == self).unwrap_or(0)]
+    }
+}
+
+/// The command line's `--backend` values: [`Backend::NAMES`], each with a line of help.
+#[cfg(feature = "cli")]
+impl clap::ValueEnum for Backend {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Backend::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let help = match self {
+            Backend::Auto => {
+                "A real GPU when there is one; the CPU tracer when the only adapters are CPU \
+                 Vulkan implementations (lavapipe: slower than the CPU tracer for every whole \
+                 render measured) or there is none (said in one line); the CPU tracer too when \
+                 the scene exceeds the GPU's buffers"
+            }
+            Backend::Gpu => "The WGSL compute shader through wgpu (Vulkan)",
+            Backend::GpuRq => {
+                "The shader with the triangles traced by the driver's ray queries \
+                 (VK_KHR_ray_query: ray-tracing GPUs, Mesa >= 24.1's lavapipe); an error where \
+                 there are none"
+            }
+            Backend::Cpu => "The f32 CPU mirror of the shader",
+            Backend::CpuF64 => "The f64 CPU ground truth",
+        };
+        Some(clap::builder::PossibleValue::new(self.name()).help(help))
     }
 }
 
@@ -222,6 +250,39 @@ pub enum Tracer {
     Gpu(Box<Gpu>),
     /// The ray-query shader on this device (which has ray queries).
     GpuRq(Box<Gpu>),
+}
+
+impl Tracer {
+    /// What reports call this tracer.
+    pub fn kind(&self) -> TracerKind {
+        match self {
+            Tracer::Cpu => TracerKind::CpuF32,
+            Tracer::CpuF64 => TracerKind::CpuF64,
+            Tracer::Gpu(_) => TracerKind::Gpu,
+            Tracer::GpuRq(_) => TracerKind::GpuRq,
+        }
+    }
+
+    /// The device a GPU tracer traces on; `None` for the CPU tracers.
+    pub fn gpu(&self) -> Option<&Gpu> {
+        match self {
+            Tracer::Gpu(g) | Tracer::GpuRq(g) => Some(g),
+            Tracer::Cpu | Tracer::CpuF64 => None,
+        }
+    }
+
+    /// A GPU tracer's device and the kernel it runs for `spec` (the ray-query kernel for
+    /// [`Tracer::GpuRq`], compiled once a device); `None` for the CPU tracers.
+    pub fn kernel(
+        &self,
+        spec: crate::buffers::Specialisation,
+    ) -> Result<Option<(&Gpu, &Kernel)>, GpuError> {
+        Ok(match self {
+            Tracer::Gpu(g) => Some((g, g.compute_kernel(spec)?)),
+            Tracer::GpuRq(g) => Some((g, g.ray_query_kernel()?)),
+            Tracer::Cpu | Tracer::CpuF64 => None,
+        })
+    }
 }
 
 /// Renders scenes on one backend; holds the device (if any) across renders.

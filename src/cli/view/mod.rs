@@ -513,11 +513,9 @@ impl View {
         let (device, queue) = (gpu.device.clone(), gpu.queue.clone());
         let adapter_name = gpu.info.name.clone();
         let renderer = Renderer::from_gpu(opts.backend, gpu)?;
-        let name = match renderer.tracer() {
-            glint::Tracer::Cpu | glint::Tracer::CpuF64 => {
-                format!("{}, shown on {adapter_name}", renderer.describe())
-            }
-            _ => renderer.describe(),
+        let name = match renderer.tracer().gpu() {
+            None => format!("{}, shown on {adapter_name}", renderer.describe()),
+            Some(_) => renderer.describe(),
         };
         let mut config = surface
             .get_default_config(&adapter, size.0, size.1)
