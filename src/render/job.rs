@@ -342,7 +342,13 @@ impl<'a> Job<'a> {
         let band = matches!(output, Output::Exr(_))
             && !aovs.is_empty()
             && matches!(renderer.tracer(), Tracer::Cpu);
-        check_aov_output(&output, &aovs, w, h, band)?;
+        // The rows of AOVs held at once: a band where streamed, else the whole frame.
+        let aov_rows = if band {
+            band_rows(w, h, CPU_BAND_MIB)
+        } else {
+            h
+        };
+        check_aov_output(&output, &aovs, w, h, aov_rows)?;
         // Only the f64 tracer reads the scene's primitives once they are flat, so the
         // others take them from a scene of the job's own (the dragon's are 35 MB, a sixth
         // of the former peak).
@@ -388,12 +394,7 @@ impl<'a> Job<'a> {
         let math = options.math_mode();
         let keep_geometry = keep || !aovs.is_empty();
         if !aovs.is_empty() {
-            let rows = if band {
-                band_rows(w, h, CPU_BAND_MIB)
-            } else {
-                h
-            };
-            run.aov_frame = Some(AovImage::new(w, rows, &aovs, IdMap::new(scene)));
+            run.aov_frame = Some(AovImage::new(w, aov_rows, &aovs, IdMap::new(scene)));
             run.aov_band = band;
         }
         let mut sink = match (&output, &run.aov_frame) {
@@ -436,9 +437,12 @@ impl<'a> Job<'a> {
             && let Some(colour) = &image
             && let Some(a) = aov_image.take()
         {
-            let channels = a.with_colour(colour);
-            run.stages
-                .time("write", || crate::image::write_channels(p, w, h, &channels))?;
+            // The frame whole, through the same writer and channel layout as a streamed one.
+            run.stages.time("write", || {
+                let mut exr = Sink::open_exr_aov(p, w, h, &a)?;
+                exr.write_rows_aov(&colour.pixels, &a)?;
+                exr.finish()
+            })?;
             image = None;
         }
         let aov_image = aov_image.filter(|_| output == Output::Memory);
@@ -507,13 +511,13 @@ fn prepare(
 }
 
 /// Checks, before any work, that `aovs` can go to `output` (a PNG's AOVs each to a PNG of
-/// its own, which must be writable) and that the frame of them fits in memory.
+/// its own, which must be writable) and that `rows` rows of them fit in memory.
 fn check_aov_output(
     output: &Output,
     aovs: &[Aov],
     w: u32,
     h: u32,
-    band: bool,
+    rows: u32,
 ) -> Result<(), RenderError> {
     if aovs.is_empty() {
         return Ok(());
@@ -524,15 +528,11 @@ fn check_aov_output(
             crate::image::check_writable(&AovImage::png_path(p, a))?;
         }
     }
-    // The AOVs' planes (4 bytes a channel), the colour held whole, and an EXR's copy of
-    // its channels R, G, B, A; a band of planes and colour where they are streamed.
+    // The AOVs' planes (4 bytes a channel) and the colour, whole or a band of each where
+    // they are streamed, and 16 bytes a pixel of headroom (once an EXR's copy of R, G, B,
+    // A, which the writer no longer makes).
     let channels: usize = aovs.iter().map(|a| a.channel_names().len()).sum();
     let per_pixel = 4 * channels as u64 + 16 + 16;
-    let rows = if band {
-        band_rows(w, h, CPU_BAND_MIB)
-    } else {
-        h
-    };
     super::check_memory(w, h, w as u64 * rows as u64 * per_pixel)?;
     Ok(())
 }
