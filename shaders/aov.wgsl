@@ -1,4 +1,4 @@
-// glint's kernel, part 6 of 7: arbitrary output variables (AOVs), what the primary ray
+// glint's kernel, part 7 of 8: arbitrary output variables (AOVs), what the primary ray
 // through each pixel's centre hit (after `whitted.wgsl`; see `common.wgsl`'s header for how
 // the parts are joined and mirrored). Its own entry point, which a colour render's
 // pipeline never compiles. Mirror: `src/cpu/aov.rs`.

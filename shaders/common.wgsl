@@ -1,9 +1,9 @@
-// glint's kernel, part 1 of 7: what the parts share. The override constants, the
+// glint's kernel, part 1 of 8: what the parts share. The override constants, the
 // constants, the structs shared with Rust and their bindings, the ray and hit records and
 // the small helpers.
 //
 // The kernel is `exact.wgsl` + `common.wgsl` + `prims.wgsl` + `texture.wgsl` + `trace.wgsl` +
-// `whitted.wgsl` + `aov.wgsl`, joined in that order at build time (`src/gpu/mod.rs`,
+// `instance.wgsl` + `whitted.wgsl` + `aov.wgsl`, joined in that order at build time (`src/gpu/mod.rs`,
 // `SHADER_SOURCE`). Each part has its mirror in `src/cpu/` with the same stem (`exact.rs`,
 // `common.rs`, `prims.rs`, `texture.rs`, `trace.rs`, `whitted.rs`, `aov.rs`): every
 // function, with the same name, in
@@ -56,6 +56,9 @@ override TEXTURES: bool = false;
 /// compiler drops `pow_det` from the kernel (present but never run, it cost lavapipe 13 %
 /// of the sphere's frame).
 override POWERS: bool = true;
+/// The scene places meshes again (`[[instances]]`): rays go through the two-level BVH of
+/// `instance.wgsl`. Off, none of it is compiled.
+override INSTANCES: bool = false;
 
 // ---- constants (each one's story is in `src/buffers.rs`) ------------------------------
 
@@ -75,6 +78,10 @@ const TRIANGLE_BIT: u32 = 0x80000000u;
 const INFINITY: f32 = 0x1.fffffep+127f;
 const SHADOW_EPSILON: f32 = 1.1920929e-7; // see buffers::SHADOW_EPSILON
 const BVH_STACK: u32 = 48u; // bvh::MAX_DEPTH: the builder never makes a deeper tree
+const TOP_STACK: u32 = 96u; // 2 × BVH_STACK: a top-level path, then a mesh's
+const INSTANCE_IDENTITY: u32 = 0x80000000u; // Instance::root of an identity instance
+const NO_MATERIAL: u32 = 0xffffffffu; // Instance::material: the mesh's own
+const NO_INSTANCE: u32 = 0xffffffffu; // the two-level search is in the top level
 const BOX_SLACK: f32 = 4.76837158e-7; // 4 ε ≥ 2γ(3): pbrt's conservative slab test
 const NAIVE_MIN_SIN2: f32 = 1.9073486e-6; // 16 ε: see buffers::NAIVE_MIN_SIN2
 const FLUSH_BELOW: f32 = 1.17549435e-38; // 2^-126, the smallest normal f32: see buffers::FLUSH_BELOW
@@ -103,7 +110,7 @@ struct Params {
     samples: u32,
     max_depth: u32,
     min_weight: f32,
-    _pad0: u32,
+    n_instances: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -229,6 +236,7 @@ struct Hit {
     prim: u32,
     u: f32,
     v: f32,
+    inst: u32,
 }
 
 /// `x` when `x > 0`, else 0 (NaN gives 0).

@@ -1,4 +1,4 @@
-// glint's kernel, part 0 of 7: correctly rounded division and square root, the only doors
+// glint's kernel, part 0 of 8: correctly rounded division and square root, the only doors
 // through which arithmetic that a driver may round its own way reaches the kernel.
 //
 // Vulkan rounds `+ - *` correctly but lets `/` be off by 2.5 ULP and `sqrt` by a few. Every

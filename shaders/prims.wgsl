@@ -1,4 +1,4 @@
-// glint's kernel, part 2 of 7: the primitives (after `common.wgsl`; see its header for
+// glint's kernel, part 2 of 8: the primitives (after `common.wgsl`; see its header for
 // how the parts are joined and mirrored). Everything that knows what a sphere or a
 // triangle is lives here: the intersection tests, and the only switches on a primitive's
 // kind, `hit_prim`, `is_triangle` (for `prim_normal` and `prim_material`) and `shading_at`
@@ -252,7 +252,7 @@ fn is_triangle(id: u32) -> bool {
 /// The unit geometric normal at hit point `p` (not yet facing the ray).
 fn prim_normal(hit: Hit, p: vec3<f32>) -> vec3<f32> {
     if is_triangle(hit.prim) {
-        let tri = triangles[hit.prim & ~TRIANGLE_BIT];
+        let tri = triangle_of(hit);
         return normalize_rn(cross3(tri.b - tri.a, tri.c - tri.a));
     }
     let s = spheres[hit.prim];
@@ -262,6 +262,9 @@ fn prim_normal(hit: Hit, p: vec3<f32>) -> vec3<f32> {
 /// The material index of the hit primitive.
 fn prim_material(hit: Hit) -> u32 {
     if is_triangle(hit.prim) {
+        if INSTANCES {
+            return triangle_of(hit).material;
+        }
         return triangles[hit.prim & ~TRIANGLE_BIT].material;
     }
     return spheres[hit.prim].material;
@@ -285,11 +288,11 @@ fn shading_at(hit: Hit, p: vec3<f32>, n: vec3<f32>) -> Shading {
     if !SMOOTH || (hit.prim & TRIANGLE_BIT) == 0u {
         return Shading(n, p);
     }
-    let tri = triangles[hit.prim & ~TRIANGLE_BIT];
+    let tri = triangle_of(hit);
     if tri.normals == FLAT {
         return Shading(n, p);
     }
-    let vn = normals[tri.normals];
+    let vn = normals_of(hit, tri);
     let w = 1.0 - hit.u - hit.v;
     var na = vn.na;
     var nb = vn.nb;

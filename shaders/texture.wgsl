@@ -1,4 +1,4 @@
-// glint's kernel, part 3 of 7: image textures (after `common.wgsl` and `prims.wgsl`; see
+// glint's kernel, part 3 of 8: image textures (after `common.wgsl` and `prims.wgsl`; see
 // the first's header for how the parts are joined and mirrored). Mirror: `src/cpu/texture.rs`.
 //
 // A texture is linear RGB f32 texels in a storage buffer (`texels`), filtered by the

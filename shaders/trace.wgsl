@@ -1,4 +1,4 @@
-// glint's kernel, part 4 of 7: rays through the scene (after `common.wgsl` and
+// glint's kernel, part 4 of 8: rays through the scene (after `common.wgsl` and
 // `prims.wgsl`; see the first's header for how the parts are joined and mirrored). The
 // camera, the searches for the nearest hit and for a blocker (every primitive, or the
 // BVH), shading, and the entry points. Mirror: `src/cpu/trace.rs`.
@@ -23,7 +23,7 @@ fn closest_sphere(ray: Ray, t_min: f32, best: Hit) -> Hit {
     for (var k = 0u; k < params.n_spheres; k = k + 1u) {
         let t = hit_sphere(ray, spheres[k], t_min, b.t);
         if t < b.t {
-            b = Hit(t, k, 0.0, 0.0);
+            b = Hit(t, k, 0.0, 0.0, 0u);
         }
     }
     return b;
@@ -43,7 +43,7 @@ fn sphere_blocks(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
 /// The nearest hit in (t_min, t_max) over every sphere, then every triangle; the first
 /// primitive wins ties. `prim` is PRIM_NONE on a miss.
 fn closest_hit_all(ray: Ray, t_min: f32, t_max: f32) -> Hit {
-    var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
+    var best = Hit(t_max, PRIM_NONE, 0.0, 0.0, 0u);
     if HAS_SPHERES {
         best = closest_sphere(ray, t_min, best);
     }
@@ -52,7 +52,7 @@ fn closest_hit_all(ray: Ray, t_min: f32, t_max: f32) -> Hit {
         for (var k = 0u; k < params.n_triangles; k = k + 1u) {
             let h = hit_triangle(ray, sh, triangles[k], t_min, best.t);
             if h.x < best.t {
-                best = Hit(h.x, k | TRIANGLE_BIT, h.y, h.z);
+                best = Hit(h.x, k | TRIANGLE_BIT, h.y, h.z, 0u);
             }
         }
     }
@@ -127,7 +127,7 @@ fn nearer(t: f32, id: u32, best: Hit) -> bool {
 /// bounds the depth) and at most one step per node, so a NaN ray cannot loop. Same result
 /// as `closest_hit_all`.
 fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
-    var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
+    var best = Hit(t_max, PRIM_NONE, 0.0, 0.0, 0u);
     let sh = ray_shear(ray.dir);
     let inv_dir = div3_rn(vec3<f32>(1.0), ray.dir);
     if params.n_nodes == 0u {
@@ -173,7 +173,7 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
                 let id = prim_ids[k];
                 let h = hit_prim(ray, sh, id, t_min, tie_bound(best));
                 if nearer(h.x, id, best) {
-                    best = Hit(h.x, id, h.y, h.z);
+                    best = Hit(h.x, id, h.y, h.z, 0u);
                 }
             }
         }
@@ -257,18 +257,24 @@ fn finite_bound(t_max: f32) -> f32 {
 /// (spheres before triangles). `prim` is PRIM_NONE on a miss.
 fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     let t_hi = finite_bound(t_max);
+    if INSTANCES {
+        return closest_hit_top(ray, t_min, t_hi);
+    }
     if USE_BVH {
         return closest_hit_bvh(ray, t_min, t_hi);
     }
     return closest_hit_all(ray, t_min, t_hi);
 }
 
-/// Whether anything but primitive `skip` lies on the ray in (t_min, t_max); stops at the
-/// first hit. A convex primitive (a sphere, a flat triangle) cannot shadow a point of its
-/// own where N·L > 0, so skipping the one that was hit loses no shadow and removes all
-/// self-shadowing, whatever the rounding of the hit point.
-fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+/// Whether anything but primitive `skip` (of instance `skip_inst`) lies on the ray in
+/// (t_min, t_max); stops at the first hit. A convex primitive (a sphere, a flat triangle)
+/// cannot shadow a point of its own where N·L > 0, so skipping the one that was hit loses
+/// no shadow and removes all self-shadowing, whatever the rounding of the hit point.
+fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32, skip_inst: u32) -> bool {
     let t_hi = finite_bound(t_max);
+    if INSTANCES {
+        return occluded_top(ray, t_min, t_hi, skip, skip_inst);
+    }
     if USE_BVH {
         return occluded_bvh(ray, t_min, t_hi, skip);
     }
@@ -364,12 +370,12 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
                 let o = shadow_origin(sh.p, n);
                 if LIGHT_KINDS && light.kind == LIGHT_DIRECTIONAL {
                     // Towards the light without end.
-                    if occluded(Ray(o, l), 0.0, INFINITY, hit.prim) {
+                    if occluded(Ray(o, l), 0.0, INFINITY, hit.prim, hit.inst) {
                         continue;
                     }
                 } else {
                     let d = light.position - o;
-                    if occluded(Ray(o, d), 0.0, 1.0, hit.prim) {
+                    if occluded(Ray(o, d), 0.0, 1.0, hit.prim, hit.inst) {
                         continue;
                     }
                 }

@@ -30,7 +30,7 @@ fn ray_query_valid(ray: Ray, t_min: f32, t_max: f32) -> bool {
 /// The driver's interval is closed, glint's open: a triangle hit at exactly t_min is dropped.
 fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     let t_hi = finite_bound(t_max);
-    var best = Hit(t_hi, PRIM_NONE, 0.0, 0.0);
+    var best = Hit(t_hi, PRIM_NONE, 0.0, 0.0, 0u);
     if HAS_SPHERES {
         best = closest_sphere(ray, t_min, best);
     }
@@ -40,7 +40,7 @@ fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
         rayQueryProceed(&rq);
         let x = rayQueryGetCommittedIntersection(&rq);
         if x.kind == RAY_QUERY_INTERSECTION_TRIANGLE && x.t > t_min && x.t < best.t {
-            best = Hit(x.t, x.primitive_index | TRIANGLE_BIT, x.barycentrics.x, x.barycentrics.y);
+            best = Hit(x.t, x.primitive_index | TRIANGLE_BIT, x.barycentrics.x, x.barycentrics.y, 0u);
         }
     }
     return best;
@@ -48,8 +48,9 @@ fn closest_hit(ray: Ray, t_min: f32, t_max: f32) -> Hit {
 
 /// Whether anything but primitive `skip` lies on the ray in (t_min, t_max): the spheres by
 /// glint's test, the triangles by a terminate-on-first-hit query in which every candidate
-/// but `skip` (and any outside the open interval) is accepted.
-fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32) -> bool {
+/// but `skip` (and any outside the open interval) is accepted. `skip_inst` is always 0: the
+/// ray-query tracer takes no scene with instances (`src/gpu/rq.rs`).
+fn occluded(ray: Ray, t_min: f32, t_max: f32, skip: u32, skip_inst: u32) -> bool {
     let t_hi = finite_bound(t_max);
     if HAS_SPHERES && sphere_blocks(ray, t_min, t_hi, skip) {
         return true;

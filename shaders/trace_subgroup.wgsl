@@ -83,7 +83,7 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
         return closest_hit_bvh_ray(ray, t_min, t_max);
     }
     let r = subgroupExclusiveAdd(1u) & 7u;
-    var best = Hit(t_max, PRIM_NONE, 0.0, 0.0);
+    var best = Hit(t_max, PRIM_NONE, 0.0, 0.0, 0u);
     let sh = ray_shear(ray.dir);
     let inv_dir = div3_rn(vec3<f32>(1.0), ray.dir);
     if params.n_nodes == 0u {
@@ -185,7 +185,7 @@ fn closest_hit_bvh(ray: Ray, t_min: f32, t_max: f32) -> Hit {
             let id = prim_ids[k];
             let h = hit_prim_packet(ray, sh, id, r, t_min, tie_bound(best));
             if live && nearer(h.x, id, best) {
-                best = Hit(h.x, id, h.y, h.z);
+                best = Hit(h.x, id, h.y, h.z, 0u);
             }
         }
         step = step + 1u;

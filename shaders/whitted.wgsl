@@ -1,4 +1,4 @@
-// glint's kernel, part 5 of 7: Whitted's secondary rays (1980), compiled in only where a
+// glint's kernel, part 6 of 8: Whitted's secondary rays (1980), compiled in only where a
 // scene has a mirror or glass (`WHITTED`). CPU mirror: `src/cpu/whitted.rs`, function for
 // function.
 //

@@ -27,6 +27,10 @@ pub struct SceneBuffers {
     pub nodes: Vec<BvhNode>,
     /// Primitive ids in BVH leaf order.
     pub prim_ids: Vec<u32>,
+    /// The instances of a scene with `[[instances]]` (then `nodes` is the two-level BVH of
+    /// [`crate::two_level`]); empty for any other. On the GPU they follow the nodes in the
+    /// node buffer ([`SceneBuffers::node_words`]).
+    pub instances: Vec<Instance>,
     /// Vertex normals of the smooth triangles, entry 0 unused (`Triangle::normals` = `FLAT`
     /// names no entry); empty when no triangle is smooth, and then the pipeline's `SMOOTH`
     /// is off and the shader never reads it.
@@ -178,19 +182,32 @@ impl SceneBuffers {
         let lights: Vec<Light> = scene.lights.iter().map(light).collect();
         let texels = texture_buffers(&scene.textures);
         stages.record("flatten", t_flat.elapsed());
-        let kept = old.filter(|o| o.spheres == spheres && o.triangles == triangles);
+        let kept = old.filter(|o| {
+            scene.instances.is_empty() && o.spheres == spheres && o.triangles == triangles
+        });
         let reused = kept.is_some();
+        let mut instances = Vec::new();
         let tree = match kept {
             Some(old) => (old.nodes, old.prim_ids),
+            None if !scene.instances.is_empty() => {
+                let cache = scene.cache.as_deref();
+                let two = crate::two_level::build(scene, &spheres, &triangles, &|s, t| {
+                    cached_bvh(cache, &stages, s, t)
+                });
+                instances = two.instances;
+                (two.nodes, two.prim_ids)
+            }
             None => {
                 let bvh = cached_bvh(scene.cache.as_deref(), &stages, &spheres, &triangles);
                 (bvh.nodes, bvh.prim_ids)
             }
         };
+        let n_instances = instances.len() as u32;
         let buf = SceneBuffers {
             normals,
             uvs,
             texels,
+            instances,
             stages: Timings(stages.into_times()),
             ..SceneBuffers::with_bvh(
                 params,
@@ -203,7 +220,22 @@ impl SceneBuffers {
                 scene.shadows,
             )
         };
+        let buf = SceneBuffers {
+            params: Params {
+                n_instances,
+                ..buf.params
+            },
+            ..buf
+        };
         (buf, reused)
+    }
+
+    /// The node buffer as the kernel binds it: the nodes, then each instance as four node
+    /// slots (WGSL `instance_at`).
+    pub fn node_words(&self) -> Vec<BvhNode> {
+        let mut words = self.nodes.clone();
+        words.extend_from_slice(bytemuck::cast_slice::<Instance, BvhNode>(&self.instances));
+        words
     }
 
     /// For the CPU's packet tracer only: `triangles[prim_ids[k]]` at k (a zeroed triangle
@@ -234,6 +266,7 @@ impl SceneBuffers {
         self.triangles = Vec::new();
         self.nodes = Vec::new();
         self.prim_ids = Vec::new();
+        self.instances = Vec::new();
         self.normals = Vec::new();
         self.uvs = Vec::new();
         self.texels = Vec::new();
@@ -298,6 +331,7 @@ impl SceneBuffers {
             lights,
             nodes,
             prim_ids,
+            instances: Vec::new(),
             normals: Vec::new(),
             uvs: Vec::new(),
             texels: Vec::new(),
@@ -370,6 +404,8 @@ pub struct Specialisation {
     /// WGSL `POWERS`: some Phong material has a non-integer exponent (`pow_det` compiled
     /// in).
     pub powers: bool,
+    /// WGSL `INSTANCES`: the scene has `[[instances]]`; rays go through the two-level BVH.
+    pub instances: bool,
     /// WGSL `EXACT_MATH` and `INEXACT_DRIVER`: how the kernel divides and takes square
     /// roots. The CPU tracers ignore it: they divide as IEEE 754 does.
     pub math: MathMode,
@@ -480,6 +516,7 @@ impl Specialisation {
                 .materials
                 .iter()
                 .any(|m| m.model == MODEL_PHONG && m.n_int < 0),
+            instances: !buf.instances.is_empty(),
             math: MathMode::default(),
         }
     }
@@ -503,6 +540,7 @@ impl Specialisation {
             light_kinds: true,
             textures: true,
             powers: true,
+            instances: !buf.instances.is_empty(),
             math: MathMode::default(),
         }
     }
@@ -518,7 +556,7 @@ impl Specialisation {
     }
 
     /// The `(name, value)` pairs for `PipelineCompilationOptions::constants`.
-    pub fn constants(&self) -> [(&'static str, f64); 15] {
+    pub fn constants(&self) -> [(&'static str, f64); 16] {
         let b = |x: bool| if x { 1.0 } else { 0.0 };
         [
             ("HAS_SPHERES", b(self.has_spheres)),
@@ -534,6 +572,7 @@ impl Specialisation {
             ("LIGHT_KINDS", b(self.light_kinds)),
             ("TEXTURES", b(self.textures)),
             ("POWERS", b(self.powers)),
+            ("INSTANCES", b(self.instances)),
             ("EXACT_MATH", b(self.math.math != Math::Fast)),
             ("INEXACT_DRIVER", b(self.math.inexact_driver)),
         ]

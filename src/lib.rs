@@ -33,6 +33,7 @@ pub mod scene;
 pub mod shared;
 pub mod stages;
 pub mod traversal_stats;
+pub mod two_level;
 
 pub use render::{
     Backend, RenderError, RenderOptions, Renderer, Tracer, TracerKind, UnknownBackend,

@@ -47,6 +47,7 @@ fn specialisations() -> [Specialisation; 2] {
         light_kinds: true,
         textures: true,
         powers: true,
+        instances: true,
         math: Default::default(),
     };
     let lean = Specialisation {
@@ -60,6 +61,7 @@ fn specialisations() -> [Specialisation; 2] {
         light_kinds: false,
         textures: false,
         powers: false,
+        instances: false,
         ..all
     };
     [all, lean]
@@ -106,7 +108,7 @@ fn every_kernel_reaches_the_driver_with_no_contractible_arithmetic() {
 #[test]
 fn the_aov_part_changes_no_word_of_the_colour_kernels() {
     let cut = SHADER_SOURCE
-        .find("// glint's kernel, part 6 of 7: arbitrary output variables")
+        .find("// glint's kernel, part 7 of 8: arbitrary output variables")
         .expect("aov.wgsl is in the kernel");
     let without = ExactSource::compile(&SHADER_SOURCE[..cut], LAVAPIPE).unwrap();
     let with = ExactSource::compile(SHADER_SOURCE, LAVAPIPE).unwrap();

@@ -87,7 +87,7 @@ fn shared_structs_match_wgsl() {
             samples,
             max_depth,
             min_weight,
-            _pad0,
+            n_instances,
             _pad1,
             _pad2
         ]
@@ -119,6 +119,23 @@ fn shared_structs_match_wgsl() {
         [ka, model, kd, n, ks, n_int, kr, ior, kt, fresnel]
     );
     check_struct!(&m, BvhNode, "BvhNode", [lo, first, hi, count_axis]);
+    // An instance is read from four node slots (WGSL `instance_at`): the size is four
+    // nodes, and each integer sits at a slot's `first` (word 3 of 8) or `count_axis` (7).
+    {
+        use glint::buffers::Instance;
+        use std::mem::{offset_of, size_of};
+        assert_eq!(size_of::<Instance>(), 4 * size_of::<BvhNode>());
+        let node = size_of::<BvhNode>();
+        assert_eq!(
+            offset_of!(Instance, root),
+            3 * node + offset_of!(BvhNode, first)
+        );
+        assert_eq!(
+            offset_of!(Instance, material),
+            3 * node + offset_of!(BvhNode, count_axis)
+        );
+        assert_eq!(offset_of!(Instance, to_world), node + 16);
+    }
     check_struct!(
         &m,
         Light,
@@ -202,6 +219,22 @@ fn shader_constants_match_rust() {
     assert_eq!(find("NAIVE_MIN_SIN2"), naga::Literal::F32(NAIVE_MIN_SIN2));
     assert_eq!(find("FLUSH_BELOW"), naga::Literal::F32(FLUSH_BELOW));
     assert_eq!(
+        find("INSTANCE_IDENTITY"),
+        naga::Literal::U32(glint::buffers::INSTANCE_IDENTITY)
+    );
+    assert_eq!(
+        find("NO_MATERIAL"),
+        naga::Literal::U32(glint::buffers::NO_MATERIAL)
+    );
+    assert_eq!(
+        find("NO_INSTANCE"),
+        naga::Literal::U32(glint::buffers::NO_INSTANCE)
+    );
+    assert_eq!(
+        find("TOP_STACK"),
+        naga::Literal::U32(glint::cpu::instance::TOP_STACK as u32)
+    );
+    assert_eq!(
         find("BVH_STACK"),
         naga::Literal::U32(glint::bvh::MAX_DEPTH as u32)
     );
@@ -220,6 +253,7 @@ fn shader_constants_match_rust() {
         light_kinds: true,
         textures: true,
         powers: true,
+        instances: true,
         math: Default::default(),
     };
     for (name, _) in spec.constants() {

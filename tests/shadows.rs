@@ -81,8 +81,8 @@ fn huge_floor_casts_no_shadow_on_itself() {
                 ];
                 for (k, (o, t_min, skip)) in schemes.into_iter().enumerate() {
                     let d = light - o;
-                    counts[k] +=
-                        trace::occluded(&g, Ray { origin: o, dir: d }, t_min, 1.0, skip) as usize;
+                    counts[k] += trace::occluded(&g, Ray { origin: o, dir: d }, t_min, 1.0, skip, 0)
+                        as usize;
                 }
             }
         }

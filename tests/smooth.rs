@@ -263,6 +263,7 @@ fn interpolated_normals_at_the_vertices_are_the_vertex_normals() {
                 prim: id | glint::buffers::TRIANGLE_BIT,
                 u,
                 v,
+                inst: 0,
             };
             let n = unit3([gn[0] * s, gn[1] * s, gn[2] * s]);
             let sh = prims::shading_at(&g, &hit, p.into(), n.into());
@@ -563,7 +564,7 @@ fn hanikas_point_removes_most_of_the_shadow_terminator() {
                         origin: o,
                         dir: light - o,
                     };
-                    trace::occluded(&g, r, 0.0, 1.0, hit.prim)
+                    trace::occluded(&g, r, 0.0, 1.0, hit.prim, 0)
                 };
                 plain += blocked(p) as u32;
                 hanika += blocked(sh.p) as u32;

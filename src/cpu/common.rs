@@ -1,4 +1,4 @@
-//! The CPU mirror of `shaders/common.wgsl`, the second of the kernel's seven parts (after `exact.wgsl`): the
+//! The CPU mirror of `shaders/common.wgsl`, the second of the kernel's eight parts (after `exact.wgsl`): the
 //! ray and hit records, the shader's module-scope globals (`params`, the buffers, the
 //! override constants) as the fields of [`Globals`], and the small helpers.
 //!
@@ -91,6 +91,8 @@ pub struct Hit<R> {
     pub u: R,
     /// Barycentric weight of c.
     pub v: R,
+    /// The instance whose primitive was hit (0 where the scene has none).
+    pub inst: u32,
 }
 
 // ---- small helpers ---------------------------------------------------------------------

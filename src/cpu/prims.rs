@@ -13,6 +13,7 @@
 use super::common::{Globals, Hit, Ray, in_interval, max0, sign_nonneg};
 use super::count::Count;
 use super::exact::product_error;
+use super::instance::{normals_of, triangle_of};
 use crate::buffers::{
     FLAT, Sphere, TRIANGLE_BIT, TRIANGLE_MOLLER_TRUMBORE, TRIANGLE_NAIVE, TRIANGLE_WATERTIGHT,
     Triangle,
@@ -339,9 +340,8 @@ pub fn is_triangle<R: Real, C: Count>(g: &Globals<R, C>, id: u32) -> bool {
 /// WGSL `prim_normal`: the unit geometric normal at `p` (not yet facing the ray).
 pub fn prim_normal<R: Real, C: Count>(g: &Globals<R, C>, hit: &Hit<R>, p: V3<R>) -> V3<R> {
     if is_triangle(g, hit.prim) {
-        let tri = &g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize];
-        let (ta, tb, tc) = tri_vertices::<R>(tri);
-        return (tb - ta).cross(tc - ta).normalize();
+        let tri = triangle_of(g, hit);
+        return (tri.b - tri.a).cross(tri.c - tri.a).normalize();
     }
     let s = &g.buf.spheres[hit.prim as usize];
     (p - V3::from_f32(s.center)).normalize()
@@ -350,6 +350,9 @@ pub fn prim_normal<R: Real, C: Count>(g: &Globals<R, C>, hit: &Hit<R>, p: V3<R>)
 /// WGSL `prim_material`: the material index of the hit primitive.
 pub fn prim_material<R: Real, C: Count>(g: &Globals<R, C>, hit: &Hit<R>) -> u32 {
     if is_triangle(g, hit.prim) {
+        if g.spec.instances {
+            return triangle_of(g, hit).material;
+        }
         return g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize].material;
     }
     g.buf.spheres[hit.prim as usize].material
@@ -375,16 +378,13 @@ pub fn shading_at<R: Real, C: Count>(
     if !g.spec.smooth || (hit.prim & TRIANGLE_BIT) == 0 {
         return Shading { n, p };
     }
-    let tri = &g.buf.triangles[(hit.prim & !TRIANGLE_BIT) as usize];
+    let tri = triangle_of(g, hit);
     if tri.normals == FLAT {
         return Shading { n, p };
     }
-    let vn = &g.buf.normals[tri.normals as usize];
-    let (ta, tb, tc) = tri_vertices::<R>(tri);
+    let [mut na, mut nb, mut nc] = normals_of(g, hit, &tri);
+    let (ta, tb, tc) = (tri.a, tri.b, tri.c);
     let w = R::ONE - hit.u - hit.v;
-    let mut na = V3::<R>::from_f32(vn.na);
-    let mut nb = V3::<R>::from_f32(vn.nb);
-    let mut nc = V3::<R>::from_f32(vn.nc);
     let mut mixed = na * w + nb * hit.u + nc * hit.v;
     if mixed.dot(n) < R::ZERO {
         na = -na;

@@ -9,6 +9,7 @@
 pub use super::common::{BVH_STACK, Camera, Globals, Hit, Ray};
 use super::common::{clamp01, flush, flush3, max0, max2};
 use super::count::{Count, RayKind};
+use super::instance::{closest_hit_top, occluded_top};
 use super::prims::{
     hit_prim, hit_sphere, hit_triangle, prim_material, prim_normal, ray_shear, shading_at,
 };
@@ -55,6 +56,7 @@ pub fn closest_sphere<R: Real, C: Count>(
                 prim: k,
                 u: R::ZERO,
                 v: R::ZERO,
+                inst: 0,
             };
         }
     }
@@ -92,6 +94,7 @@ pub fn closest_hit_all<R: Real, C: Count>(
         prim: PRIM_NONE,
         u: R::ZERO,
         v: R::ZERO,
+        inst: 0,
     };
     if g.spec.has_spheres {
         best = closest_sphere(g, ray, t_min, best);
@@ -107,6 +110,7 @@ pub fn closest_hit_all<R: Real, C: Count>(
                     prim: k | TRIANGLE_BIT,
                     u: h.1,
                     v: h.2,
+                    inst: 0,
                 };
             }
         }
@@ -218,6 +222,7 @@ pub fn closest_hit_bvh<R: Real, C: Count>(
         prim: PRIM_NONE,
         u: R::ZERO,
         v: R::ZERO,
+        inst: 0,
     };
     let sh = ray_shear(g, ray.dir);
     let inv_dir = V3::splat(R::ONE) / ray.dir;
@@ -283,6 +288,7 @@ pub fn closest_hit_bvh<R: Real, C: Count>(
                         prim: id,
                         u: h.1,
                         v: h.2,
+                        inst: 0,
                     };
                 }
             }
@@ -389,7 +395,9 @@ pub fn closest_hit<R: Real, C: Count>(
 ) -> Hit<R> {
     let t_hi = finite_bound(t_max);
     g.count.begin(false);
-    let hit = if g.spec.use_bvh {
+    let hit = if g.spec.instances {
+        closest_hit_top(g, ray, t_min, t_hi)
+    } else if g.spec.use_bvh {
         closest_hit_bvh(g, ray, t_min, t_hi)
     } else {
         closest_hit_all(g, ray, t_min, t_hi)
@@ -398,19 +406,22 @@ pub fn closest_hit<R: Real, C: Count>(
     hit
 }
 
-/// WGSL `occluded`: whether anything but primitive `skip` lies on the ray in (t_min,
-/// t_max). A convex primitive cannot shadow a point of its own where N·L > 0, so skipping
-/// the one that was hit loses no shadow.
+/// WGSL `occluded`: whether anything but primitive `skip` (of instance `skip_inst`) lies
+/// on the ray in (t_min, t_max). A convex primitive cannot shadow a point of its own where
+/// N·L > 0, so skipping the one that was hit loses no shadow.
 pub fn occluded<R: Real, C: Count>(
     g: &Globals<R, C>,
     ray: Ray<R>,
     t_min: R,
     t_max: R,
     skip: u32,
+    skip_inst: u32,
 ) -> bool {
     let t_hi = finite_bound(t_max);
     g.count.begin(true);
-    let blocked = if g.spec.use_bvh {
+    let blocked = if g.spec.instances {
+        occluded_top(g, ray, t_min, t_hi, skip, skip_inst)
+    } else if g.spec.use_bvh {
         occluded_bvh(g, ray, t_min, t_hi, skip)
     } else {
         occluded_all(g, ray, t_min, t_hi, skip)
@@ -511,12 +522,26 @@ pub fn shade<R: Real, C: Count>(g: &Globals<R, C>, ray: Ray<R>, hit: &Hit<R>) ->
                 let o = shadow_origin(sh.p, n);
                 if g.spec.light_kinds && light.kind == LIGHT_DIRECTIONAL {
                     // Towards the light without end.
-                    if occluded(g, Ray { origin: o, dir: l }, R::ZERO, R::INFINITY, hit.prim) {
+                    if occluded(
+                        g,
+                        Ray { origin: o, dir: l },
+                        R::ZERO,
+                        R::INFINITY,
+                        hit.prim,
+                        hit.inst,
+                    ) {
                         continue;
                     }
                 } else {
                     let d = position - o;
-                    if occluded(g, Ray { origin: o, dir: d }, R::ZERO, R::ONE, hit.prim) {
+                    if occluded(
+                        g,
+                        Ray { origin: o, dir: d },
+                        R::ZERO,
+                        R::ONE,
+                        hit.prim,
+                        hit.inst,
+                    ) {
                         continue;
                     }
                 }

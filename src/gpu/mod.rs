@@ -18,7 +18,7 @@ pub use kernel::{GpuTimings, Kernel, RENDER_STORAGE_BUFFERS, tile_rows};
 pub use resident::Resident;
 
 /// The WGSL source of the kernel: `shaders/exact.wgsl`, `common.wgsl`, `prims.wgsl`,
-/// `texture.wgsl`, `trace.wgsl`, `whitted.wgsl` and `aov.wgsl`, joined in that order (WGSL
+/// `texture.wgsl`, `trace.wgsl`, `instance.wgsl`, `whitted.wgsl` and `aov.wgsl`, joined in that order (WGSL
 /// needs no declaration before use).
 pub const SHADER_SOURCE: &str = concat!(
     include_str!("../../shaders/exact.wgsl"),
@@ -26,6 +26,7 @@ pub const SHADER_SOURCE: &str = concat!(
     include_str!("../../shaders/prims.wgsl"),
     include_str!("../../shaders/texture.wgsl"),
     include_str!("../../shaders/trace.wgsl"),
+    include_str!("../../shaders/instance.wgsl"),
     include_str!("../../shaders/whitted.wgsl"),
     include_str!("../../shaders/aov.wgsl"),
 );
@@ -111,6 +112,13 @@ pub enum GpuError {
         /// The adapter asked.
         adapter: String,
     },
+    /// The ray-query tracer was given a scene with `[[instances]]`, which its one
+    /// acceleration structure does not place.
+    #[error(
+        "the ray-query tracer does not take scenes with [[instances]] yet: \
+         --backend gpu (the compute tracer) or cpu renders them"
+    )]
+    RayQueryInstances,
     /// Out of memory, a validation error, or a lost device during the work.
     #[error("GPU error during {during}: {message}")]
     Runtime {

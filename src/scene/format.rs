@@ -43,6 +43,9 @@ pub struct SceneFile {
     /// OBJ meshes.
     #[serde(default)]
     pub meshes: Vec<Spanned<MeshFile>>,
+    /// Named meshes placed again.
+    #[serde(default)]
+    pub instances: Vec<Spanned<InstanceFile>>,
     /// How the image is written.
     pub output: Option<OutputFile>,
 }
@@ -180,4 +183,24 @@ pub struct MeshFile {
     pub translate: Option<Vec3File>,
     /// Shade with interpolated vertex normals (the OBJ's `vn`, else computed).
     pub smooth: Option<bool>,
+    /// The name `[[instances]]` place it by.
+    pub name: Option<Spanned<String>>,
+    /// Drawn only where an instance places it (default false).
+    pub hidden: Option<Spanned<bool>>,
+}
+
+/// `[[instances]]`: a named mesh placed again.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InstanceFile {
+    /// The `[[meshes]]` entry's name.
+    pub mesh: Spanned<String>,
+    /// Per-axis scale (no component 0).
+    pub scale: Option<Vec3File>,
+    /// Rotation in degrees about x, then y, then z.
+    pub rotate: Option<Vec3File>,
+    /// Translation.
+    pub translate: Option<Vec3File>,
+    /// A material that replaces the mesh's own for this instance.
+    pub material: Option<Spanned<String>>,
 }

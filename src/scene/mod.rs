@@ -5,6 +5,7 @@ pub mod camera_path;
 mod error;
 mod format;
 mod gltf;
+mod instance;
 mod mesh;
 mod obj;
 mod ply;
@@ -98,6 +99,10 @@ pub struct Scene {
     /// The camera path (`[[camera.keys]]`, in increasing frames; empty: none): see
     /// [`Scene::camera_at`].
     pub camera_keys: Vec<CameraKey>,
+    /// The meshes with a name, in file order.
+    pub named: Vec<NamedMesh>,
+    /// `[[instances]]`, in file order: with none, the scene is traced as one BVH.
+    pub instances: Vec<Instance>,
 }
 
 /// How a scene is read: settings as values (the command line makes them from its flags and

@@ -248,3 +248,44 @@ pub struct TextureCoords {
 /// term times a zero factor would make NaN, written as black). Every physical scene is far
 /// below it.
 pub const MAX_COLOUR: f32 = 1e6;
+
+/// A `[[meshes]]` entry with a `name`: the triangles it placed, which `[[instances]]`
+/// place again (their object space is the mesh as its own entry placed it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamedMesh {
+    /// The entry's `name`.
+    pub name: String,
+    /// Its triangles in [`Scene::triangles`].
+    pub triangles: std::ops::Range<usize>,
+    /// Drawn only where an instance places it (`hidden = true`).
+    pub hidden: bool,
+}
+
+/// An affine map as the tracers read it: three rows `[m0, m1, m2, t]`, so that a point
+/// `p` maps to `(m0·p.x + m1·p.y) + m2·p.z + t` per row.
+pub type Affine = [[f32; 4]; 3];
+
+/// The identity map.
+pub const IDENTITY: Affine = [
+    [1.0, 0.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0, 0.0],
+    [0.0, 0.0, 1.0, 0.0],
+];
+
+/// An `[[instances]]` entry: a named mesh placed again.
+///
+/// Both maps are computed in f64 from the entry's scale, rotation and translation and
+/// rounded to f32 once: `to_world` = T·R·S, `to_object` = S⁻¹·Rᵀ·T⁻¹. They are the scene's
+/// values, as a triangle's f32 vertices are; the tracers take rays into object space by
+/// `to_object` and carry shading back by `to_world` (vertices) and `to_object`ᵀ (normals).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instance {
+    /// The mesh: an index into [`Scene::named`].
+    pub mesh: usize,
+    /// Object space to world space.
+    pub to_world: Affine,
+    /// World space to object space.
+    pub to_object: Affine,
+    /// The material that replaces the mesh's own, if any.
+    pub material: Option<u32>,
+}

@@ -194,7 +194,9 @@ impl Validator<'_> {
         }
 
         let mut smooth = Vec::new();
+        let mut named = Vec::new();
         for (i, m) in f.meshes.iter().enumerate() {
+            let start = triangles.len();
             triangle_sources.push((
                 triangles.len(),
                 format!(
@@ -217,7 +219,14 @@ impl Validator<'_> {
                     warnings: &mut warnings,
                 },
             )?;
+            let range = start..triangles.len();
+            if let Some(n) = instance::named_mesh(self, i, m.get_ref(), range, &named)? {
+                named.push(n);
+            }
         }
+        let names: Vec<String> = materials.iter().map(|m| m.name.clone()).collect();
+        let instances = instance::instances(self, &f.instances, &named, &names, &uvs)?;
+        instance::check_hidden_placed(self, &f.meshes, &named, &instances)?;
         let (textures, downscaled) = textures.into_fitted();
         warnings.extend(downscaled);
 
@@ -251,6 +260,8 @@ impl Validator<'_> {
             cache: self.cache.cloned(),
             camera_keys,
             load_stages: crate::stages::Timings::default(),
+            named,
+            instances,
         })
     }
 

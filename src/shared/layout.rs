@@ -39,6 +39,14 @@ pub const MAX_WHITTED_DEPTH: u32 = WHITTED_STACK - 1;
 pub const PRIM_NONE: u32 = 0xffff_ffff;
 /// Set in `Hit::prim` when the index is a triangle's (else it is a sphere's).
 pub const TRIANGLE_BIT: u32 = 0x8000_0000;
+/// `Instance::root` bit of an instance whose maps are both the identity (neither is
+/// applied). WGSL: `INSTANCE_IDENTITY`.
+pub const INSTANCE_IDENTITY: u32 = 0x8000_0000;
+/// `Instance::material` of an instance shaded with its mesh's own materials. WGSL:
+/// `NO_MATERIAL`.
+pub const NO_MATERIAL: u32 = 0xffff_ffff;
+/// The two-level search's instance while it is in the top level. WGSL: `NO_INSTANCE`.
+pub const NO_INSTANCE: u32 = 0xffff_ffff;
 
 /// The `t` of "no hit yet": `f32::MAX`, so that every finite hit beats it and no
 /// arithmetic on it makes an infinity. WGSL: `INFINITY`.
@@ -120,8 +128,9 @@ pub struct Params {
     /// A secondary ray whose weight's largest channel is below this is not traced (the
     /// scene's `min_weight`; 0 traces every one). Offset 128.
     pub min_weight: f32,
-    /// Offset 132.
-    pub _pad0: u32,
+    /// Number of instances (0 without `[[instances]]`); each is four node slots after
+    /// the `n_nodes` nodes. Offset 132.
+    pub n_instances: u32,
     /// Offset 136.
     pub _pad1: u32,
     /// Offset 140.
@@ -241,6 +250,29 @@ pub struct BvhNode {
     /// `count << 2 | axis`: a leaf has count > 0 (and axis 0); an interior node has
     /// count 0 and its split axis, which orders the visit. Offset 28.
     pub count_axis: u32,
+}
+
+/// An instance: a mesh's BVH placed by an affine map (see `shaders/instance.wgsl`). The
+/// kernel reads it from four [`BvhNode`] slots after the nodes (WGSL `instance_at`), so
+/// that `render` binds no more storage buffers; each integer sits where a slot holds a
+/// `u32` (`first` or `count_axis`), never where it holds a float. 128 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Instance {
+    /// World to object space, rows `[m0, m1, m2, t]`. Offset 0.
+    pub to_object: [[f32; 4]; 3],
+    /// Object to world space, rows `[m0, m1, m2, t]`. Offset 48.
+    pub to_world: [[f32; 4]; 3],
+    /// Offset 96.
+    pub _pad0: [u32; 3],
+    /// The root node of the mesh's BVH, with [`INSTANCE_IDENTITY`] where both maps are
+    /// the identity. Offset 108 (the fourth slot's `first`).
+    pub root: u32,
+    /// Offset 112.
+    pub _pad1: [u32; 3],
+    /// The material replacing the mesh's, or [`NO_MATERIAL`]. Offset 124 (the fourth
+    /// slot's `count_axis`).
+    pub material: u32,
 }
 
 /// A material. Must match WGSL `struct Material` (80 bytes).

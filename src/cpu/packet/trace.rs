@@ -228,6 +228,7 @@ impl PacketHits {
             prim: self.prim[l],
             u: self.u[l],
             v: self.v[l],
+            inst: 0,
         }
     }
 }
@@ -529,6 +530,7 @@ pub(super) fn closest_hit_lanes<B: Build, O: Origins>(
                         prim: bp[l],
                         u: 0.0,
                         v: 0.0,
+                        inst: 0,
                     };
                     let take = (mask >> l) & 1 != 0 && nearer(h.t[l], id, &cur);
                     let new = Hit {
@@ -536,6 +538,7 @@ pub(super) fn closest_hit_lanes<B: Build, O: Origins>(
                         prim: id,
                         u: 0.0,
                         v: 0.0,
+                        inst: 0,
                     };
                     let b = tie_bound(&new);
                     bt[l] = if take { h.t[l] } else { bt[l] };

@@ -494,6 +494,9 @@ impl Kernel {
         if !self.is_ray_query() {
             return Ok(None);
         }
+        if !buf.instances.is_empty() {
+            return Err(GpuError::RayQueryInstances);
+        }
         super::rq::build(device, queue, &buf.triangles).map(Some)
     }
 
@@ -514,7 +517,11 @@ impl Kernel {
             storage_buffer(device, "triangles", &buf.triangles, none)?,
             storage_buffer(device, "materials", &buf.materials, none)?,
             storage_buffer(device, "lights", &buf.lights, none)?,
-            storage_buffer(device, "BVH nodes", &buf.nodes, none)?,
+            if buf.instances.is_empty() {
+                storage_buffer(device, "BVH nodes", &buf.nodes, none)?
+            } else {
+                storage_buffer(device, "BVH nodes", &buf.node_words(), none)?
+            },
             storage_buffer(device, "BVH primitive ids", &buf.prim_ids, none)?,
         ])
     }

@@ -28,7 +28,8 @@ mod transform;
 pub use error::{FaceError, MeshError};
 use gunzip::{GUNZIP_PIECE, ObjParse, gunzip, gunzip_parse, inflate};
 use place::{mesh_transform, place_models, place_parsed};
-use transform::{Transform, corner_normals};
+pub(super) use transform::Transform;
+use transform::corner_normals;
 
 /// Whether a triangle has zero area in f64 (collinear or coincident vertices).
 pub fn is_degenerate(v: &[[f32; 3]; 3]) -> bool {

@@ -6,14 +6,18 @@ use super::*;
 /// z: Rz·Ry·Rx), then translate, rounded to f32 once at the end. Host-side geometry: both
 /// tracers read the same transformed f32 vertices, so its rounding is shared by
 /// construction (glam's `DMat3 * DVec3` sums each row left to right, without FMA).
-pub(super) struct Transform {
-    pub(super) scale: glam::DVec3,
-    pub(super) rot: glam::DMat3,
-    pub(super) translate: glam::DVec3,
+pub(in crate::scene) struct Transform {
+    pub(in crate::scene) scale: glam::DVec3,
+    pub(in crate::scene) rot: glam::DMat3,
+    pub(in crate::scene) translate: glam::DVec3,
 }
 
 impl Transform {
-    pub(super) fn new(scale: [f32; 3], rotate_deg: [f32; 3], translate: [f32; 3]) -> Self {
+    pub(in crate::scene) fn new(
+        scale: [f32; 3],
+        rotate_deg: [f32; 3],
+        translate: [f32; 3],
+    ) -> Self {
         let [ax, ay, az] = rotate_deg.map(|d| (d as f64).to_radians());
         let v = |a: [f32; 3]| glam::DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
         Transform {

@@ -1,0 +1,361 @@
+//! Instances: a named mesh placed again by `[[instances]]`, traced through the two-level
+//! BVH. An identity instance is the mesh placed directly, in every bit, on every tracer;
+//! the GPU is its mirror in every bit on lavapipe, scaled, rotated, mirrored, overlapping
+//! and glass instances included; a transformed instance is the mesh transformed at load,
+//! up to rounding; bad entries are errors naming the file, the line and the key.
+
+mod common;
+
+gpu_sentinel!();
+
+use common::{check_agreement, render_gpu, same_bits};
+use glint::buffers::{SceneBuffers, Specialisation};
+use glint::image::Image;
+use glint::scene::{Scene, TriangleAlgorithm};
+
+/// A scene in `scenes/` (so that `suzanne.ply` is found): a floor, two lights with
+/// shadows, a mirror and a glass material, and `body` (meshes and instances).
+fn scene_text(body: &str) -> String {
+    format!(
+        r#"ambient = [0.1, 0.1, 0.12]
+background = [0.06, 0.07, 0.1]
+shadows = true
+max_depth = 4
+
+[camera]
+eye = [0.0, 3.5, 7.0]
+look_at = [0.0, -0.2, 0.0]
+fov = 45.0
+width = 160
+height = 120
+
+[[lights]]
+position = [-3.0, 6.0, 5.0]
+color = [0.8, 0.75, 0.7]
+
+[[lights]]
+position = [5.0, 3.0, 2.0]
+color = [0.25, 0.3, 0.4]
+
+[materials.gold]
+model = "phong"
+ka = [0.5, 0.38, 0.12]
+kd = [0.75, 0.56, 0.18]
+ks = [0.8, 0.75, 0.6]
+n = 40.0
+
+[materials.mirror]
+model = "phong"
+ka = [0.02, 0.02, 0.02]
+kd = [0.05, 0.05, 0.05]
+ks = [0.6, 0.6, 0.6]
+n = 80.0
+kr = [0.85, 0.85, 0.85]
+
+[materials.glass]
+model = "phong"
+ka = [0.0, 0.0, 0.0]
+kd = [0.02, 0.02, 0.02]
+ks = [0.5, 0.5, 0.5]
+n = 60.0
+kt = [0.9, 0.9, 0.9]
+ior = 1.5
+fresnel = true
+
+[materials.floor]
+model = "diffuse"
+ka = [0.35, 0.35, 0.4]
+kd = [0.45, 0.45, 0.5]
+
+[[triangles]]
+vertices = [[-8.0, -1.0, -8.0], [8.0, -1.0, 8.0], [8.0, -1.0, -8.0]]
+material = "floor"
+
+[[triangles]]
+vertices = [[-8.0, -1.0, -8.0], [-8.0, -1.0, 8.0], [8.0, -1.0, 8.0]]
+material = "floor"
+
+{body}"#
+    )
+}
+
+fn parse(text: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/instances-test.toml");
+    Scene::parse(text, &path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn buffers(scene: &Scene, algo: TriangleAlgorithm) -> (SceneBuffers, Specialisation) {
+    common::buffers(scene, 160, 120, algo)
+}
+
+/// The mesh placed by its own entry, then the same mesh hidden and placed by an instance
+/// with no transform, and the second moved by `nudge` in y.
+fn direct_and_identity(nudge: f32) -> (Scene, Scene) {
+    let mesh = |extra: &str| {
+        format!(
+            "[[meshes]]\nfile = \"suzanne.ply\"\nmaterial = \"gold\"\nsmooth = true\nrotate = [0.0, 20.0, 0.0]\n{extra}"
+        )
+    };
+    let direct = parse(&scene_text(&mesh("")));
+    let instance = if nudge == 0.0 {
+        String::new()
+    } else {
+        format!("translate = [0.0, {nudge:?}, 0.0]\n")
+    };
+    let placed = parse(&scene_text(&format!(
+        "{}\n[[instances]]\nmesh = \"suzanne\"\n{instance}",
+        mesh("name = \"suzanne\"\nhidden = true\n")
+    )));
+    assert!(direct.instances.is_empty() && placed.instances.len() == 1);
+    (direct, placed)
+}
+
+#[test]
+fn an_identity_instance_is_the_mesh_placed_directly_in_every_bit() {
+    let (direct, placed) = direct_and_identity(0.0);
+    let gpu = common::gpu();
+    for algo in TriangleAlgorithm::ALL {
+        let (a, sa) = buffers(&direct, algo);
+        let (b, sb) = buffers(&placed, algo);
+        assert!(!sa.instances && sb.instances);
+        let ca = glint::cpu::render_f32(&a, sa);
+        assert!(ca.hit_count() > 5000, "{algo}: the mesh is in view");
+        same_bits(&ca, &glint::cpu::render_f32(&b, sb)).unwrap_or_else(|e| panic!("{algo} f32: {e}"));
+        same_bits(
+            &glint::cpu::render_f64(&direct, &a, sa),
+            &glint::cpu::render_f64(&placed, &b, sb),
+        )
+        .unwrap_or_else(|e| panic!("{algo} f64: {e}"));
+        if let Some(gpu) = gpu {
+            same_bits(&render_gpu(gpu, &a, sa), &render_gpu(gpu, &b, sb))
+                .unwrap_or_else(|e| panic!("{algo} gpu: {e}"));
+        }
+    }
+}
+
+/// The twin: an instance moved by a thousandth is a different picture.
+#[test]
+fn a_nudged_instance_is_not_the_mesh_placed_directly() {
+    let (direct, placed) = direct_and_identity(1e-3);
+    let algo = TriangleAlgorithm::Watertight;
+    let (a, sa) = buffers(&direct, algo);
+    let (b, sb) = buffers(&placed, algo);
+    assert!(same_bits(&glint::cpu::render_f32(&a, sa), &glint::cpu::render_f32(&b, sb)).is_err());
+}
+
+/// Suzanne placed seven times: scaled, rotated, mirrored (negative scale), overlapping
+/// (two at one place), touching the floor, a mirror and a glass instance (total internal
+/// reflection inside it), and the named mesh drawn where its entry puts it.
+const MANY: &str = r#"
+[[meshes]]
+name = "suzanne"
+file = "suzanne.ply"
+material = "gold"
+smooth = true
+
+[[instances]]
+mesh = "suzanne"
+translate = [-2.5, 0.0, -1.0]
+rotate = [0.0, 30.0, 0.0]
+material = "mirror"
+
+[[instances]]
+mesh = "suzanne"
+translate = [2.5, 0.0, -1.0]
+scale = [-1.0, 1.0, 1.0]
+
+[[instances]]
+mesh = "suzanne"
+translate = [2.5, 0.0, -1.0]
+rotate = [0.0, 90.0, 0.0]
+scale = [0.9, 0.9, 0.9]
+
+[[instances]]
+mesh = "suzanne"
+translate = [-1.2, -0.5, 2.0]
+scale = [0.5, 0.5, 0.5]
+material = "glass"
+
+[[instances]]
+mesh = "suzanne"
+translate = [1.2, -0.2, 2.0]
+scale = [0.8, -0.8, 0.8]
+rotate = [10.0, -40.0, 5.0]
+
+[[instances]]
+mesh = "suzanne"
+translate = [0.0, 0.0, -4.0]
+scale = [3.0, 1.5, 1.0]
+"#;
+
+fn many(nudge: &str) -> Scene {
+    parse(&scene_text(&MANY.replacen("[-2.5, 0.0, -1.0]", nudge, 1)))
+}
+
+#[test]
+fn instanced_scenes_on_the_gpu_are_the_mirror_in_every_bit() {
+    let Some(gpu) = common::gpu() else { return };
+    let lavapipe = common::bit_exact_expected(gpu);
+    let scene = many("[-2.5, 0.0, -1.0]");
+    for algo in TriangleAlgorithm::ALL {
+        let (buf, spec) = buffers(&scene, algo);
+        assert!(spec.instances && spec.whitted && spec.smooth);
+        let g = render_gpu(gpu, &buf, spec);
+        let c = glint::cpu::render_f32(&buf, spec);
+        assert!(c.hit_count() > 10_000, "{algo}: the instances are in view");
+        let d = check_agreement(&g, &c, lavapipe).unwrap_or_else(|e| panic!("{algo}: {e}"));
+        eprintln!("{algo}: {} differing pixels, {} hit/miss", d.differing_pixels, d.hit_miss);
+        // The packets' path and the mirror's own are one image.
+        same_bits(&c, &glint::cpu::render_f32_mirror(&buf, spec)).unwrap();
+    }
+}
+
+/// The twin: the GPU's picture is not the mirror's of a scene with one instance moved.
+#[test]
+fn the_gpu_comparison_sees_a_moved_instance() {
+    let Some(gpu) = common::gpu() else { return };
+    let algo = TriangleAlgorithm::Watertight;
+    let (buf, spec) = buffers(&many("[-2.5, 0.0, -1.0]"), algo);
+    let (moved, _) = buffers(&many("[-2.5, 0.001, -1.0]"), algo);
+    let g = render_gpu(gpu, &buf, spec);
+    assert!(check_agreement(&g, &glint::cpu::render_f32(&moved, spec), true).is_err());
+}
+
+/// The share of pixels whose 8-bit values differ between the two f64 pictures.
+fn share_off(a: &Image, b: &Image) -> f64 {
+    let d = glint::compare::diff(a, b);
+    d.differing_pixels as f64 / d.pixels as f64
+}
+
+/// One mesh transformed by its `[[meshes]]` entry (at load, in f64, vertices rounded to
+/// f32) and by an instance of the untransformed mesh (rays into object space at render
+/// time), with `scale` and `rotate`: the f64 truths of the two.
+fn at_load_and_instanced(scale: &str, rotate: &str) -> (Image, Image) {
+    let xf = format!("scale = {scale}\nrotate = {rotate}\ntranslate = [0.3, 0.2, 0.5]\n");
+    let loaded = parse(&scene_text(&format!(
+        "[[meshes]]\nfile = \"suzanne.ply\"\nmaterial = \"gold\"\nsmooth = true\n{xf}"
+    )));
+    let instanced = parse(&scene_text(&format!(
+        "[[meshes]]\nname = \"m\"\nhidden = true\nfile = \"suzanne.ply\"\nmaterial = \"gold\"\nsmooth = true\n\n[[instances]]\nmesh = \"m\"\n{xf}"
+    )));
+    let algo = TriangleAlgorithm::Watertight;
+    let (a, sa) = buffers(&loaded, algo);
+    let (b, sb) = buffers(&instanced, algo);
+    (
+        glint::cpu::render_f64(&loaded, &a, sa),
+        glint::cpu::render_f64(&instanced, &b, sb),
+    )
+}
+
+#[test]
+fn a_transformed_instance_is_the_mesh_transformed_at_load() {
+    for (scale, rotate) in [
+        ("[1.5, 1.5, 1.5]", "[0.0, 35.0, 0.0]"),
+        ("[-1.0, 1.0, 1.0]", "[0.0, 0.0, 0.0]"),
+        ("[0.7, 1.3, -0.9]", "[20.0, -50.0, 10.0]"),
+        ("[0.05, 0.05, 0.05]", "[0.0, 90.0, 0.0]"),
+    ] {
+        let (a, b) = at_load_and_instanced(scale, rotate);
+        assert!(a.hit_count() > 1000);
+        let off = share_off(&a, &b);
+        eprintln!("scale {scale} rotate {rotate}: {:.4} % of pixels off in 8 bits", off * 100.0);
+        assert!(off < 0.005, "scale {scale} rotate {rotate}: {off}");
+    }
+}
+
+/// The twin: a degree of rotation more is seen.
+#[test]
+fn the_transform_comparison_sees_a_degree() {
+    let xf = |r: f32| {
+        format!("scale = [1.5, 1.5, 1.5]\nrotate = [0.0, {r:?}, 0.0]\ntranslate = [0.3, 0.2, 0.5]\n")
+    };
+    let loaded = parse(&scene_text(&format!(
+        "[[meshes]]\nfile = \"suzanne.ply\"\nmaterial = \"gold\"\nsmooth = true\n{}",
+        xf(35.0)
+    )));
+    let instanced = parse(&scene_text(&format!(
+        "[[meshes]]\nname = \"m\"\nhidden = true\nfile = \"suzanne.ply\"\nmaterial = \"gold\"\nsmooth = true\n\n[[instances]]\nmesh = \"m\"\n{}",
+        xf(36.0)
+    )));
+    let algo = TriangleAlgorithm::Watertight;
+    let (a, sa) = buffers(&loaded, algo);
+    let (b, sb) = buffers(&instanced, algo);
+    let off = share_off(
+        &glint::cpu::render_f64(&loaded, &a, sa),
+        &glint::cpu::render_f64(&instanced, &b, sb),
+    );
+    assert!(off >= 0.005, "{off}");
+}
+
+/// `body` parsed, expecting an error at `line` of the scene naming `key` and saying `what`.
+fn bad(body: &str, line_of: &str, key: &str, what: &str) {
+    let text = scene_text(body);
+    let line = text
+        .lines()
+        .position(|l| l.contains(line_of))
+        .unwrap_or_else(|| panic!("{line_of:?} not in the scene"))
+        + 1;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bad.toml");
+    let e = Scene::parse(&text, &path).expect_err("accepted").to_string();
+    assert!(e.contains(&format!("bad.toml:{line}: {key}")), "{e}");
+    assert!(e.contains(what), "{e}");
+}
+
+#[test]
+fn bad_instances_are_errors_naming_the_line_and_the_key() {
+    let mesh = "[[meshes]]\nname = \"m\"\nfile = \"suzanne.ply\"\nmaterial = \"gold\"\n";
+    bad(
+        &format!("{mesh}[[instances]]\nmesh = \"n\"\n"),
+        "mesh = \"n\"",
+        "instances[0].mesh",
+        "no mesh is named \"n\" (named meshes: m)",
+    );
+    bad(
+        "[[instances]]\nmesh = \"n\"\n",
+        "mesh = \"n\"",
+        "instances[0].mesh",
+        "give a [[meshes]] entry",
+    );
+    bad(
+        &format!("{mesh}{}", mesh.replace("name = \"m\"", "name = \"m\" # again")),
+        "# again",
+        "meshes[1].name",
+        "a second mesh named \"m\"",
+    );
+    bad(
+        "[[meshes]]\nfile = \"suzanne.ply\"\nmaterial = \"gold\"\nhidden = true\n",
+        "hidden = true",
+        "meshes[0].hidden",
+        "needs a name",
+    );
+    bad(
+        &format!("{mesh}hidden = true\n"),
+        "hidden = true",
+        "meshes[0].hidden",
+        "no [[instances]] entry places it",
+    );
+    bad(
+        &format!("{mesh}[[instances]]\nmesh = \"m\"\nscale = [1.0, 0.0, 1.0]\n"),
+        "scale = [1.0, 0.0",
+        "instances[0].scale",
+        "zero component",
+    );
+    bad(
+        &format!("{mesh}[[instances]]\nmesh = \"m\"\nmaterial = \"chrome\"\n"),
+        "material = \"chrome\"",
+        "instances[0].material",
+        "chrome",
+    );
+    bad(
+        &format!("{mesh}[[instances]]\nmesh = \"m\"\ntranslate = [1.0, nan, 1.0]\n"),
+        "translate = [1.0, nan",
+        "instances[0].translate",
+        "",
+    );
+    bad(
+        &format!("{mesh}[[instances]]\nmesh = \"m\"\nshear = 1.0\n"),
+        "shear = 1.0",
+        "",
+        "shear",
+    );
+}
