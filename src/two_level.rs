@@ -10,11 +10,11 @@
 //! is the scene's own primitives (the identity); a named mesh that is not hidden is drawn
 //! where its entry placed it by an identity instance; then the file's `[[instances]]`.
 
-use crate::buffers::{
-    BvhNode, INSTANCE_IDENTITY, Instance, NO_MATERIAL, Sphere, TRIANGLE_BIT, Triangle,
-};
 use crate::bvh::Bvh;
 use crate::scene::{Affine, IDENTITY, Scene};
+use crate::shared::layout::{
+    BvhNode, INSTANCE_IDENTITY, Instance, NO_MATERIAL, Sphere, TRIANGLE_BIT, Triangle,
+};
 
 /// What the two-level build gives: every node (top level first), the bottom trees'
 /// primitive ids, and the instances (the kernel's `instance_at` records).

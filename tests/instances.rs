@@ -120,7 +120,8 @@ fn an_identity_instance_is_the_mesh_placed_directly_in_every_bit() {
         assert!(!sa.instances && sb.instances);
         let ca = glint::cpu::render_f32(&a, sa);
         assert!(ca.hit_count() > 5000, "{algo}: the mesh is in view");
-        same_bits(&ca, &glint::cpu::render_f32(&b, sb)).unwrap_or_else(|e| panic!("{algo} f32: {e}"));
+        same_bits(&ca, &glint::cpu::render_f32(&b, sb))
+            .unwrap_or_else(|e| panic!("{algo} f32: {e}"));
         same_bits(
             &glint::cpu::render_f64(&direct, &a, sa),
             &glint::cpu::render_f64(&placed, &b, sb),
@@ -140,7 +141,13 @@ fn a_nudged_instance_is_not_the_mesh_placed_directly() {
     let algo = TriangleAlgorithm::Watertight;
     let (a, sa) = buffers(&direct, algo);
     let (b, sb) = buffers(&placed, algo);
-    assert!(same_bits(&glint::cpu::render_f32(&a, sa), &glint::cpu::render_f32(&b, sb)).is_err());
+    assert!(
+        same_bits(
+            &glint::cpu::render_f32(&a, sa),
+            &glint::cpu::render_f32(&b, sb)
+        )
+        .is_err()
+    );
 }
 
 /// Suzanne placed seven times: scaled, rotated, mirrored (negative scale), overlapping
@@ -204,7 +211,10 @@ fn instanced_scenes_on_the_gpu_are_the_mirror_in_every_bit() {
         let c = glint::cpu::render_f32(&buf, spec);
         assert!(c.hit_count() > 10_000, "{algo}: the instances are in view");
         let d = check_agreement(&g, &c, lavapipe).unwrap_or_else(|e| panic!("{algo}: {e}"));
-        eprintln!("{algo}: {} differing pixels, {} hit/miss", d.differing_pixels, d.hit_miss);
+        eprintln!(
+            "{algo}: {} differing pixels, {} hit/miss",
+            d.differing_pixels, d.hit_miss
+        );
         // The packets' path and the mirror's own are one image.
         same_bits(&c, &glint::cpu::render_f32_mirror(&buf, spec)).unwrap();
     }
@@ -258,7 +268,10 @@ fn a_transformed_instance_is_the_mesh_transformed_at_load() {
         let (a, b) = at_load_and_instanced(scale, rotate);
         assert!(a.hit_count() > 1000);
         let off = share_off(&a, &b);
-        eprintln!("scale {scale} rotate {rotate}: {:.4} % of pixels off in 8 bits", off * 100.0);
+        eprintln!(
+            "scale {scale} rotate {rotate}: {:.4} % of pixels off in 8 bits",
+            off * 100.0
+        );
         assert!(off < 0.005, "scale {scale} rotate {rotate}: {off}");
     }
 }
@@ -267,7 +280,9 @@ fn a_transformed_instance_is_the_mesh_transformed_at_load() {
 #[test]
 fn the_transform_comparison_sees_a_degree() {
     let xf = |r: f32| {
-        format!("scale = [1.5, 1.5, 1.5]\nrotate = [0.0, {r:?}, 0.0]\ntranslate = [0.3, 0.2, 0.5]\n")
+        format!(
+            "scale = [1.5, 1.5, 1.5]\nrotate = [0.0, {r:?}, 0.0]\ntranslate = [0.3, 0.2, 0.5]\n"
+        )
     };
     let loaded = parse(&scene_text(&format!(
         "[[meshes]]\nfile = \"suzanne.ply\"\nmaterial = \"gold\"\nsmooth = true\n{}",
@@ -296,7 +311,9 @@ fn bad(body: &str, line_of: &str, key: &str, what: &str) {
         .unwrap_or_else(|| panic!("{line_of:?} not in the scene"))
         + 1;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/bad.toml");
-    let e = Scene::parse(&text, &path).expect_err("accepted").to_string();
+    let e = Scene::parse(&text, &path)
+        .expect_err("accepted")
+        .to_string();
     assert!(e.contains(&format!("bad.toml:{line}: {key}")), "{e}");
     assert!(e.contains(what), "{e}");
 }
@@ -317,7 +334,10 @@ fn bad_instances_are_errors_naming_the_line_and_the_key() {
         "give a [[meshes]] entry",
     );
     bad(
-        &format!("{mesh}{}", mesh.replace("name = \"m\"", "name = \"m\" # again")),
+        &format!(
+            "{mesh}{}",
+            mesh.replace("name = \"m\"", "name = \"m\" # again")
+        ),
         "# again",
         "meshes[1].name",
         "a second mesh named \"m\"",
@@ -357,5 +377,40 @@ fn bad_instances_are_errors_naming_the_line_and_the_key() {
         "shear = 1.0",
         "",
         "shear",
+    );
+}
+
+/// The README's picture of `scenes/suzanne-instances.toml` is what the code renders now
+/// (regenerate: `cargo run --release -- render scenes/suzanne-instances.toml -o
+/// docs/images/suzanne-instances.png --backend cpu`).
+#[test]
+fn the_readme_picture_of_instances_is_what_the_code_renders() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scene = Scene::load(root.join("scenes/suzanne-instances.toml")).unwrap();
+    assert_eq!(scene.instances.len(), 8);
+    let (w, h) = scene.size();
+    let buf = SceneBuffers::new(&scene, w, h, scene.triangle);
+    let img = glint::cpu::render_f32(&buf, Specialisation::for_scene(&buf));
+    let png = image::open(root.join("docs/images/suzanne-instances.png"))
+        .unwrap()
+        .to_rgb8();
+    assert_eq!((png.width(), png.height()), (w, h));
+    let ours = img.to_rgb8_encoded(scene.encoding);
+    let off = ours
+        .chunks(3)
+        .zip(png.as_raw().chunks(3))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(off, 0, "{off} pixels differ from the committed picture");
+    // The twin: without its last instance the scene is not the picture.
+    let mut fewer = scene.clone();
+    fewer.instances.pop();
+    let buf = SceneBuffers::new(&fewer, w, h, fewer.triangle);
+    let img = glint::cpu::render_f32(&buf, Specialisation::for_scene(&buf));
+    let ours = img.to_rgb8_encoded(fewer.encoding);
+    assert!(
+        ours.chunks(3)
+            .zip(png.as_raw().chunks(3))
+            .any(|(a, b)| a != b)
     );
 }

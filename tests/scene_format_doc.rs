@@ -31,6 +31,7 @@ fn scene_with(at: &str, extra: &str) -> String {
             "[[triangles]]\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\nmaterial = \"m\"\n",
         ),
         ("meshes[]", "[[meshes]]\nfile = \"absent.obj\"\n"),
+        ("instances[]", "[[instances]]\nmesh = \"m\"\n"),
         ("output", "[output]\n"),
     ];
     let mut s = String::new();
@@ -76,7 +77,7 @@ fn documented_keys(text: &str) -> BTreeSet<String> {
         .collect()
 }
 
-const TABLES: [&str; 9] = [
+const TABLES: [&str; 10] = [
     "",
     "camera",
     "camera.keys[]",
@@ -85,6 +86,7 @@ const TABLES: [&str; 9] = [
     "spheres[]",
     "triangles[]",
     "meshes[]",
+    "instances[]",
     "output",
 ];
 
@@ -101,6 +103,7 @@ fn all_parser_keys() -> BTreeSet<String> {
         "spheres",
         "triangles",
         "meshes",
+        "instances",
         "output",
     ] {
         assert!(keys.remove(t), "{t} is not a top-level key of the parser");

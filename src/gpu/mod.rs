@@ -380,6 +380,11 @@ impl Gpu {
         &self,
         spec: crate::buffers::Specialisation,
     ) -> Result<&Kernel, GpuError> {
+        // The two-level search of an instanced scene is per ray in every kernel: the
+        // per-ray one is the smaller.
+        if spec.instances {
+            return Ok(&self.kernel);
+        }
         Ok(match self.packet_kernel()? {
             Some(p) if spec.use_bvh => p,
             _ => &self.kernel,

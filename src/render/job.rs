@@ -117,6 +117,9 @@ pub struct RenderReport {
     pub triangles: u32,
     /// Spheres traced.
     pub spheres: usize,
+    /// The top level's instances where the scene has `[[instances]]` (the scene's own
+    /// primitives and each mesh drawn where its entry placed it are one each), else 0.
+    pub instances: usize,
     /// The triangle algorithm.
     pub algorithm: TriangleAlgorithm,
     /// The tracer that made the image (the CPU's after a fallback).
@@ -170,6 +173,9 @@ impl fmt::Display for RenderReport {
         }
         if self.spheres > 0 || self.triangles == 0 {
             write!(f, "{}, ", count(self.spheres, "sphere"))?;
+        }
+        if self.instances > 0 {
+            write!(f, "{}, ", count(self.instances, "instance"))?;
         }
         write!(
             f,
@@ -458,6 +464,7 @@ impl<'a> Job<'a> {
             height: h,
             triangles: buf.params.n_triangles,
             spheres: buf.spheres.len(),
+            instances: buf.instances.len(),
             algorithm: algo,
             tracer: traced.tracer,
             description: traced.description,
