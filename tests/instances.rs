@@ -373,6 +373,22 @@ fn bad_instances_are_errors_naming_the_line_and_the_key() {
         "",
     );
     bad(
+        &format!(
+            "{mesh}[[instances]]\nmesh = \"m\"\nscale = [2.0, 2.0, 2.0]\nmatrix = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]\n"
+        ),
+        "matrix = [[1.0",
+        "instances[0].matrix",
+        "takes no `scale` beside it",
+    );
+    bad(
+        &format!(
+            "{mesh}[[instances]]\nmesh = \"m\"\nmatrix = [[1.0, 2.0, 3.0, 0.0], [2.0, 4.0, 6.0, 0.0], [0.0, 0.0, 1.0, 0.0]]\n"
+        ),
+        "matrix = [[1.0, 2.0",
+        "instances[0].matrix",
+        "singular",
+    );
+    bad(
         &format!("{mesh}[[instances]]\nmesh = \"m\"\nshear = 1.0\n"),
         "shear = 1.0",
         "",
@@ -413,4 +429,82 @@ fn the_readme_picture_of_instances_is_what_the_code_renders() {
             .zip(png.as_raw().chunks(3))
             .any(|(a, b)| a != b)
     );
+}
+
+/// A row of `matrix` numbers as TOML.
+fn rows(m: &[[f64; 4]; 3]) -> String {
+    let row = |r: &[f64; 4]| format!("[{:?}, {:?}, {:?}, {:?}]", r[0], r[1], r[2], r[3]);
+    format!("[{}, {}, {}]", row(&m[0]), row(&m[1]), row(&m[2]))
+}
+
+/// A `matrix` that scale, rotate and translate round to the same f32 maps places the mesh
+/// in the same bits; `Scene::add_instances` with the same rows is the same scene as the
+/// file's `[[instances]]` tables.
+#[test]
+fn a_matrix_and_bulk_instances_place_as_the_tables_do() {
+    let mesh =
+        "[[meshes]]\nname = \"m\"\nhidden = true\nfile = \"suzanne.ply\"\nmaterial = \"gold\"\n";
+    let maps = [
+        [
+            [2.0, 0.0, 0.0, 1.0],
+            [0.0, 2.0, 0.0, -0.5],
+            [0.0, 0.0, 2.0, -1.0],
+        ],
+        [
+            [-1.0, 0.0, 0.0, -1.5],
+            [0.0, 0.5, 0.0, -0.5],
+            [0.0, 0.0, 1.0, 1.0],
+        ],
+    ];
+    let by_srt = parse(&scene_text(&format!(
+        "{mesh}[[instances]]\nmesh = \"m\"\nscale = [2.0, 2.0, 2.0]\ntranslate = [1.0, -0.5, -1.0]\n\n[[instances]]\nmesh = \"m\"\nscale = [-1.0, 0.5, 1.0]\ntranslate = [-1.5, -0.5, 1.0]\nmaterial = \"mirror\"\n"
+    )));
+    let by_matrix = parse(&scene_text(&format!(
+        "{mesh}[[instances]]\nmesh = \"m\"\nmatrix = {}\n\n[[instances]]\nmesh = \"m\"\nmatrix = {}\nmaterial = \"mirror\"\n",
+        rows(&maps[0]),
+        rows(&maps[1])
+    )));
+    assert_eq!(by_srt.instances, by_matrix.instances);
+    let mut bulk = parse(&scene_text(&format!(
+        "{mesh}[[instances]]\nmesh = \"m\"\nmatrix = {}\n",
+        rows(&maps[0])
+    )));
+    bulk.add_instances("m", &maps[1..], Some("mirror")).unwrap();
+    assert_eq!(bulk.instances, by_matrix.instances);
+    let algo = TriangleAlgorithm::MollerTrumbore;
+    let (a, sa) = buffers(&by_srt, algo);
+    let (b, sb) = buffers(&bulk, algo);
+    let img = glint::cpu::render_f32(&a, sa);
+    assert!(img.hit_count() > 5000);
+    same_bits(&img, &glint::cpu::render_f32(&b, sb)).unwrap();
+    // The twin: without the bulk instance the picture is another.
+    bulk.instances.pop();
+    let (c, sc) = buffers(&bulk, algo);
+    assert!(same_bits(&img, &glint::cpu::render_f32(&c, sc)).is_err());
+    // Refusals name what and where; nothing is added.
+    let n = bulk.instances.len();
+    let e = bulk
+        .add_instances("x", &maps, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("no mesh is named \"x\" (named meshes: m)"),
+        "{e}"
+    );
+    let flat = [
+        [1.0, 2.0, 3.0, 0.0],
+        [2.0, 4.0, 6.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+    ];
+    let e = bulk
+        .add_instances("m", &[maps[0], flat], None)
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("map 1: the map is singular"), "{e}");
+    let e = bulk
+        .add_instances("m", &maps, Some("chrome"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no material is named \"chrome\""), "{e}");
+    assert_eq!(bulk.instances.len(), n);
 }

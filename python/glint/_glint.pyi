@@ -69,6 +69,13 @@ class Scene:
         samples: Optional[int] = None,
     ) -> Scene:
         """A copy with the camera's given parts changed; meshes are not read again."""
+    def with_instances(
+        self, mesh: str, transforms: Any, material: Optional[str] = None
+    ) -> Scene:
+        """A copy with the named mesh placed once more for each object-to-world map of
+        transforms, an (N, 3, 4) or (N, 4, 4) array (rows [m0, m1, m2, t]), with material
+        replacing the mesh's own where given; meshes are not read again. A refused map
+        raises ValueError naming its index, and nothing is added."""
 
 class Renderer:
     """One backend, with its device and compiled pipelines kept across calls."""

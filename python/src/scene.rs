@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, RwLock};
 
 use pyo3::PyTypeInfo;
-use pyo3::exceptions::{PyKeyError, PyTypeError};
+use pyo3::exceptions::{PyKeyError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
@@ -261,6 +261,31 @@ impl Scene {
         Ok(Scene::new(self.state().with_camera(py, change)?))
     }
 
+    /// A copy of this scene with the named mesh `mesh` (a `[[meshes]]` entry's `name`)
+    /// placed once more for each map of `transforms`: an (N, 3, 4) or (N, 4, 4) array
+    /// (anything numpy makes one of) of object-to-world maps, rows `[m0, m1, m2, t]` (a
+    /// 4×4's last row must be 0, 0, 0, 1), with `material` replacing the mesh's own where
+    /// given. `[[instances]]` in bulk, without writing N tables: the meshes are not read
+    /// again. A refused map raises `ValueError` naming its index, and nothing is added.
+    /// `to_dict`, `to_toml` and pickling carry the instances (as `matrix` tables); a
+    /// scene from a file then pickles by its text, no longer following the file.
+    #[pyo3(signature = (mesh, transforms, material=None))]
+    fn with_instances(
+        &self,
+        py: Python<'_>,
+        mesh: String,
+        transforms: &Bound<'_, PyAny>,
+        material: Option<String>,
+    ) -> PyResult<Scene> {
+        let maps = affine_rows(py, transforms)?;
+        Ok(Scene::new(self.state().with_instances(
+            py,
+            &mesh,
+            &maps,
+            material.as_deref(),
+        )?))
+    }
+
     #[setter]
     fn set_camera(&self, py: Python<'_>, value: &Bound<'_, PyDict>) -> PyResult<()> {
         let mut change = CameraChange::default();
@@ -416,6 +441,83 @@ impl State {
             origin,
         })
     }
+}
+
+impl State {
+    /// `Scene.with_instances`: the maps added to a copy of the scene, and to its text as
+    /// `[[instances]]` tables with `matrix`, so that the text makes the same scene.
+    fn with_instances(
+        &self,
+        py: Python<'_>,
+        mesh: &str,
+        maps: &[[[f64; 4]; 3]],
+        material: Option<&str>,
+    ) -> PyResult<State> {
+        let mut scene = (*self.scene).clone();
+        scene
+            .add_instances(mesh, maps, material)
+            .map_err(|e| PyValueError::new_err(format!("with_instances: {e}")))?;
+        let mut text = self.text.clone();
+        let quoted = |s: &str| toml::Value::String(s.to_string()).to_string();
+        let row = |r: &[f64; 4]| format!("[{:?}, {:?}, {:?}, {:?}]", r[0], r[1], r[2], r[3]);
+        for m in maps {
+            text.push_str(&format!(
+                "\n[[instances]]\nmesh = {}\nmatrix = [{}, {}, {}]\n",
+                quoted(mesh),
+                row(&m[0]),
+                row(&m[1]),
+                row(&m[2])
+            ));
+            if let Some(name) = material {
+                text.push_str(&format!("material = {}\n", quoted(name)));
+            }
+        }
+        let origin = match &self.origin {
+            Origin::File(p, ..) => Origin::Text(p.parent().map(PathBuf::from).unwrap_or_default()),
+            other => other.clone(),
+        };
+        let _ = py;
+        Ok(State {
+            scene: Arc::new(scene),
+            text,
+            origin,
+        })
+    }
+}
+
+/// `transforms` as rows `[m0, m1, m2, t]`: an (N, 3, 4) array, or an (N, 4, 4) one whose
+/// last rows are 0, 0, 0, 1.
+fn affine_rows(py: Python<'_>, transforms: &Bound<'_, PyAny>) -> PyResult<Vec<[[f64; 4]; 3]>> {
+    let np = py.import("numpy")?;
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("dtype", np.getattr("float64")?)?;
+    let a = np.call_method("ascontiguousarray", (transforms,), Some(&kwargs))?;
+    let shape: Vec<usize> = a.getattr("shape")?.extract()?;
+    let (n, rows) = match shape[..] {
+        [n, 3, 4] => (n, 3),
+        [n, 4, 4] => (n, 4),
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "with_instances: transforms must be an (N, 3, 4) or (N, 4, 4) array of maps, not of shape {shape:?}"
+            )));
+        }
+    };
+    let flat: Vec<f64> = a.call_method0("ravel")?.call_method0("tolist")?.extract()?;
+    let mut out = Vec::with_capacity(n);
+    for (k, m) in flat.chunks_exact(rows * 4).enumerate() {
+        if rows == 4 && m[12..16] != [0.0, 0.0, 0.0, 1.0] {
+            return Err(PyValueError::new_err(format!(
+                "with_instances: map {k}: a 4x4 map's last row must be 0, 0, 0, 1, not {:?}",
+                &m[12..16]
+            )));
+        }
+        out.push([
+            [m[0], m[1], m[2], m[3]],
+            [m[4], m[5], m[6], m[7]],
+            [m[8], m[9], m[10], m[11]],
+        ]);
+    }
+    Ok(out)
 }
 
 /// `Scene.load`'s `cache`: a flag or a folder.

@@ -227,3 +227,52 @@ def test_camera_at_is_the_clis_frame_in_every_bit(tmp_path):
                                            size=(40, 30)))
     with pytest.raises(ValueError, match="not a finite number"):
         s.camera_at(float("nan"))
+
+
+def test_instances_in_bulk_from_numpy_are_the_files_tables():
+    text = (SCENES / "suzanne-instances.toml").read_text()
+    head, tail = text.split("\n[[triangles]]", 1)
+    base = head.split("\n[[instances]]\n")[0] + "\n[[triangles]]" + tail  # without its instances
+    plain = glint.Scene.from_toml(base, base_dir=SCENES)
+    maps = np.zeros((2, 4, 4))
+    maps[:, 3, 3] = 1.0
+    maps[0, :3, :3] = np.diag([2.0, 2.0, 2.0])
+    maps[0, :3, 3] = [1.0, -0.5, -1.0]
+    maps[1, :3, :3] = np.diag([-1.0, 0.5, 1.0])
+    maps[1, :3, 3] = [-1.5, -0.5, 1.0]
+    bulk = plain.with_instances("suzanne", maps, material="jade")
+    tables = "".join(
+        f'\n[[instances]]\nmesh = "suzanne"\nscale = {s}\ntranslate = {t}\nmaterial = "jade"\n'
+        for s, t in (([2.0, 2.0, 2.0], [1.0, -0.5, -1.0]), ([-1.0, 0.5, 1.0], [-1.5, -0.5, 1.0]))
+    )
+    written = glint.Scene.from_toml(base + tables, base_dir=SCENES)
+    a = glint.render(bulk, backend="cpu", size=(80, 60))
+    b = glint.render(written, backend="cpu", size=(80, 60))
+    assert same_bits(a, b)
+    # The twin: the scene without them is another picture.
+    assert not same_bits(a, glint.render(plain, backend="cpu", size=(80, 60)))
+    # (N, 3, 4) is the same; the instances travel in the text and through pickling.
+    again = plain.with_instances("suzanne", maps[:, :3, :], material="jade")
+    assert same_bits(a, glint.render(again, backend="cpu", size=(80, 60)))
+    assert bulk.to_toml().count("matrix = ") == 2
+    assert same_bits(a, glint.render(pickle.loads(pickle.dumps(bulk)), backend="cpu", size=(80, 60)))
+
+
+def test_bulk_instances_refuse_what_they_cannot_place():
+    plain = glint.Scene.load(SCENES / "suzanne-instances.toml")
+    good = np.tile(np.eye(4), (3, 1, 1))
+    with pytest.raises(ValueError, match='no mesh is named "x"'):
+        plain.with_instances("x", good)
+    flat = good.copy()
+    flat[2, 0, :3] = [1.0, 1.0, 0.0]
+    flat[2, 1, :3] = [1.0, 1.0, 0.0]
+    with pytest.raises(ValueError, match="map 2: the map is singular"):
+        plain.with_instances("suzanne", flat)
+    skew = good.copy()
+    skew[1, 3, 0] = 0.5
+    with pytest.raises(ValueError, match="map 1: a 4x4 map's last row"):
+        plain.with_instances("suzanne", skew)
+    with pytest.raises(ValueError, match="of shape"):
+        plain.with_instances("suzanne", np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="no material"):
+        plain.with_instances("suzanne", good, material="chrome")

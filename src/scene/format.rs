@@ -201,6 +201,9 @@ pub struct InstanceFile {
     pub rotate: Option<Vec3File>,
     /// Translation.
     pub translate: Option<Vec3File>,
+    /// The whole object-to-world map as three rows `[m0, m1, m2, t]`, instead of `scale`,
+    /// `rotate` and `translate`.
+    pub matrix: Option<Spanned<[[f64; 4]; 3]>>,
     /// A material that replaces the mesh's own for this instance.
     pub material: Option<Spanned<String>>,
 }

@@ -82,16 +82,27 @@ pub(super) fn instances(
             ("translate", &e.translate),
         ]) {
             if let Some(s) = s {
+                if let Some(m) = &e.matrix {
+                    return v.err(
+                        m.span(),
+                        &key("matrix"),
+                        format!("`matrix` is the whole map: it takes no `{k}` beside it"),
+                    );
+                }
                 *slot = v.finite3(s, &key(k))?;
             }
         }
         let [scale, rotate, translate] = parts;
-        let (to_world, to_object) = match maps(scale, rotate, translate) {
-            Ok(m) => m,
-            Err(why) => {
+        let made = match &e.matrix {
+            Some(m) => maps_of_matrix(m.get_ref()).map_err(|why| (m.span(), "matrix", why)),
+            None => maps(scale, rotate, translate).map_err(|why| {
                 let span = e.scale.as_ref().map_or(e.mesh.span(), |s| s.span());
-                return v.err(span, &key("scale"), why);
-            }
+                (span, "scale", why)
+            }),
+        };
+        let (to_world, to_object) = match made {
+            Ok(m) => m,
+            Err((span, k, why)) => return v.err(span, &key(k), why),
         };
         let material = match &e.material {
             None => None,
@@ -189,6 +200,118 @@ pub(super) fn maps(
     }
 }
 
+/// The maps of an object-to-world map given whole (rows `[m0, m1, m2, t]`, in f64): it
+/// rounded to f32, and its inverse computed in f64 and rounded. An error where an entry is
+/// not finite, the linear part is singular (its determinant 0 in f64), or a map does not
+/// fit f32.
+pub fn maps_of_matrix(m: &[[f64; 4]; 3]) -> Result<(Affine, Affine), String> {
+    if !m.iter().flatten().all(|x| x.is_finite()) {
+        return Err("every entry must be finite".into());
+    }
+    let linear = glam::DMat3::from_cols_array_2d(&[
+        [m[0][0], m[1][0], m[2][0]],
+        [m[0][1], m[1][1], m[2][1]],
+        [m[0][2], m[1][2], m[2][2]],
+    ]);
+    let det = linear.determinant();
+    if det == 0.0 || !det.is_finite() {
+        return Err(format!(
+            "the map is singular (determinant {det:e}): the instance would be flat, and has no inverse"
+        ));
+    }
+    let inverse = linear.inverse();
+    let t = glam::DVec3::new(m[0][3], m[1][3], m[2][3]);
+    let back = -(inverse * t);
+    let mut w = [[0.0f32; 4]; 3];
+    let mut o = [[0.0f32; 4]; 3];
+    for r in 0..3 {
+        w[r] = m[r].map(|x| x as f32);
+        let row = inverse.row(r);
+        o[r] = [row.x as f32, row.y as f32, row.z as f32, back[r] as f32];
+    }
+    if !w.iter().chain(&o).flatten().all(|x| x.is_finite()) {
+        return Err("the map or its inverse does not fit f32 (an entry too large)".into());
+    }
+    Ok((w, o))
+}
+
+impl Scene {
+    /// Places the named mesh `mesh` once more for each object-to-world map of `to_world`
+    /// (rows `[m0, m1, m2, t]`), with `material` (a name) replacing its own where given:
+    /// `[[instances]]` in bulk, for a caller that has the maps as numbers (Python's
+    /// `Scene.with_instances`). Nothing is added where any map or name is refused; the
+    /// error names the map by its index.
+    pub fn add_instances(
+        &mut self,
+        mesh: &str,
+        to_world: &[[[f64; 4]; 3]],
+        material: Option<&str>,
+    ) -> Result<(), InstancesError> {
+        let Some(k) = self.named.iter().position(|n| n.name == mesh) else {
+            return Err(InstancesError::NoMesh {
+                name: mesh.to_string(),
+                named: self.named.iter().map(|n| n.name.clone()).collect(),
+            });
+        };
+        let material = match material {
+            None => None,
+            Some(name) => {
+                let Some(i) = self.materials.iter().position(|m| m.name == name) else {
+                    return Err(InstancesError::NoMaterial(name.to_string()));
+                };
+                let range = &self.named[k].triangles;
+                if self
+                    .uvs
+                    .iter()
+                    .any(|t| t.first < range.end && t.first + t.uvs.len() > range.start)
+                {
+                    return Err(InstancesError::Textured(mesh.to_string()));
+                }
+                Some(i as u32)
+            }
+        };
+        let mut added = Vec::with_capacity(to_world.len());
+        for (index, m) in to_world.iter().enumerate() {
+            let (w, o) = maps_of_matrix(m).map_err(|why| InstancesError::Map { index, why })?;
+            added.push(Instance {
+                mesh: k,
+                to_world: w,
+                to_object: o,
+                material,
+            });
+        }
+        self.instances.extend(added);
+        Ok(())
+    }
+}
+
+/// Why [`Scene::add_instances`] refused.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum InstancesError {
+    /// No mesh has the name.
+    #[error("no mesh is named {name:?} (named meshes: {})", if named.is_empty() { "none".to_string() } else { named.join(", ") })]
+    NoMesh {
+        /// The name asked for.
+        name: String,
+        /// The names there are.
+        named: Vec<String>,
+    },
+    /// The material is not the scene's.
+    #[error("no material is named {0:?}")]
+    NoMaterial(String),
+    /// The mesh is textured: a material cannot replace its own.
+    #[error("mesh {0:?} is textured: an instance's material replaces only an untextured mesh's")]
+    Textured(String),
+    /// A map is refused.
+    #[error("map {index}: {why}")]
+    Map {
+        /// Its index in the list.
+        index: usize,
+        /// Why.
+        why: String,
+    },
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -217,6 +340,38 @@ mod tests {
             maps([1.0; 3], [0.0; 3], [0.0; 3]).unwrap(),
             (IDENTITY, IDENTITY)
         );
+    }
+
+    #[test]
+    fn a_matrix_and_its_inverse() {
+        let m = [
+            [0.0, -2.0, 0.0, 1.0],
+            [2.0, 0.0, 0.0, -3.0],
+            [0.0, 0.0, 0.5, 0.25],
+        ];
+        let (w, o) = maps_of_matrix(&m).unwrap();
+        assert_eq!(w[1], [2.0, 0.0, 0.0, -3.0]);
+        assert_eq!(o[0], [0.0, 0.5, 0.0, 1.5]);
+        assert_eq!(o[1], [-0.5, 0.0, 0.0, 0.5]);
+        assert_eq!(o[2], [0.0, 0.0, 2.0, -0.5]);
+        let flat = [
+            [1.0, 2.0, 3.0, 0.0],
+            [2.0, 4.0, 6.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ];
+        assert!(maps_of_matrix(&flat).unwrap_err().contains("singular"));
+        let nan = [
+            [f64::NAN, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ];
+        assert!(maps_of_matrix(&nan).unwrap_err().contains("finite"));
+        let big = [
+            [1e300, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ];
+        assert!(maps_of_matrix(&big).unwrap_err().contains("f32"));
     }
 
     #[test]
