@@ -18,13 +18,25 @@ fn render_small(scene: &Scene) -> crate::image::Image {
     crate::cpu::render_f32(&buf, Specialisation::for_scene(&buf))
 }
 
-/// A reader that refuses every file: the harnesses that read a scene alone touch no disk.
-fn no_files(_: &Path) -> Result<Vec<u8>, ReadError> {
+/// The one mesh the scene harnesses can read, [`FUZZ_MESH`]: a tetrahedron and a quad, so
+/// that mutated scenes reach meshes, named meshes and instances.
+pub const FUZZ_MESH_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 2 2 0\nv 3 2 0\nv 3 3 0\nv 2 3 0\n\
+f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 5 6 7 8\n";
+
+/// The file name [`FUZZ_MESH_OBJ`] is served under, in any folder.
+pub const FUZZ_MESH: &str = "fuzz-mesh.obj";
+
+/// A reader that touches no disk: [`FUZZ_MESH`] is served from memory, every other file is
+/// refused.
+fn no_files(path: &Path) -> Result<Vec<u8>, ReadError> {
+    if path.file_name().is_some_and(|n| n == FUZZ_MESH) {
+        return Ok(FUZZ_MESH_OBJ.as_bytes().to_vec());
+    }
     Err(ReadError::Other("no files while fuzzing".into()))
 }
 
 /// Target `scene_parse`: the bytes as a scene file. Mesh files it names are refused
-/// without touching the disk.
+/// without touching the disk, but for [`FUZZ_MESH`].
 pub fn scene_parse(data: &[u8]) -> Result<(), String> {
     let src = std::str::from_utf8(data).map_err(|e| e.to_string())?;
     let scene =

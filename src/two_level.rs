@@ -183,14 +183,48 @@ fn world_box(to_world: &Affine, lo: [f32; 3], hi: [f32; 3]) -> Box3 {
 /// of the centres along their widest axis, so the depth is ⌈log₂ n⌉. Empty for none.
 pub fn build_top(boxes: &[Box3]) -> Vec<BvhNode> {
     let mut ids: Vec<u32> = (0..boxes.len() as u32).collect();
-    let mut nodes = Vec::with_capacity((2 * boxes.len()).saturating_sub(1));
-    if !boxes.is_empty() {
-        top_node(boxes, &mut ids, &mut nodes);
+    if boxes.is_empty() {
+        return Vec::new();
+    }
+    top_tree(boxes, &mut ids)
+}
+
+/// Below this many instances a subtree of the top level is built on the current thread.
+const TOP_PARALLEL_MIN: usize = 4096;
+
+/// The subtree over `ids`, its interior `first` indices relative to its own start: the two
+/// halves of a large one built on two threads, then joined.
+fn top_tree(boxes: &[Box3], ids: &mut [u32]) -> Vec<BvhNode> {
+    if ids.len() < TOP_PARALLEL_MIN {
+        let mut nodes = Vec::with_capacity(2 * ids.len() - 1);
+        top_node(boxes, ids, &mut nodes);
+        return nodes;
+    }
+    let (root, mid) = top_split(boxes, ids);
+    let (left, right) = ids.split_at_mut(mid);
+    let (l, r) = rayon::join(|| top_tree(boxes, left), || top_tree(boxes, right));
+    let mut nodes = Vec::with_capacity(1 + l.len() + r.len());
+    nodes.push(BvhNode {
+        first: 1 + l.len() as u32,
+        ..root
+    });
+    for part in [l, r] {
+        let at = nodes.len() as u32;
+        nodes.extend(part.into_iter().map(|mut n| {
+            if n.count_axis >> 2 == 0 {
+                n.first += at;
+            }
+            n
+        }));
     }
     nodes
 }
 
-fn top_node(boxes: &[Box3], ids: &mut [u32], nodes: &mut Vec<BvhNode>) {
+/// The node over `ids`: a leaf where there is one (count 1, `first` its index), else an
+/// interior node (its `first` unset) and where `ids` split, at the median of the centres
+/// along their widest axis (`ids` reordered so; ties by index, so the tree is the same on
+/// any number of threads).
+fn top_split(boxes: &[Box3], ids: &mut [u32]) -> (BvhNode, usize) {
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     let mut clo = [f32::INFINITY; 3];
@@ -206,13 +240,13 @@ fn top_node(boxes: &[Box3], ids: &mut [u32], nodes: &mut Vec<BvhNode>) {
         }
     }
     if let [id] = ids {
-        nodes.push(BvhNode {
+        let leaf = BvhNode {
             lo,
             first: *id,
             hi,
             count_axis: 1 << 2,
-        });
-        return;
+        };
+        return (leaf, 0);
     }
     let axis = (0..3)
         .max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b])))
@@ -223,13 +257,24 @@ fn top_node(boxes: &[Box3], ids: &mut [u32], nodes: &mut Vec<BvhNode>) {
     };
     let mid = ids.len() / 2;
     ids.select_nth_unstable_by(mid, |a, b| centre(a).total_cmp(&centre(b)).then(a.cmp(b)));
-    let at = nodes.len();
-    nodes.push(BvhNode {
+    let node = BvhNode {
         lo,
         first: 0,
         hi,
         count_axis: axis as u32,
-    });
+    };
+    (node, mid)
+}
+
+/// The subtree over `ids` on this thread, appended depth-first to `nodes` (interior
+/// `first` indices relative to the start of `nodes`).
+fn top_node(boxes: &[Box3], ids: &mut [u32], nodes: &mut Vec<BvhNode>) {
+    let (node, mid) = top_split(boxes, ids);
+    let at = nodes.len();
+    nodes.push(node);
+    if mid == 0 {
+        return;
+    }
     let (left, right) = ids.split_at_mut(mid);
     top_node(boxes, left, nodes);
     nodes[at].first = nodes.len() as u32;
@@ -257,6 +302,25 @@ mod tests {
             .collect();
         seen.sort();
         assert_eq!(seen, (0..37).collect::<Vec<_>>());
+    }
+
+    /// The tree built in parallel (above `TOP_PARALLEL_MIN`) is the one built on one
+    /// thread, node for node.
+    #[test]
+    fn the_parallel_top_level_is_the_sequential_one() {
+        let n = 3 * TOP_PARALLEL_MIN + 17;
+        let boxes: Vec<_> = (0..n)
+            .map(|k| {
+                let (x, z) = ((k * 7919 % n) as f32, (k % 101) as f32);
+                ([x, 0.0, z], [x + 0.5, 1.0, z + 2.0])
+            })
+            .collect();
+        let parallel = build_top(&boxes);
+        let mut ids: Vec<u32> = (0..n as u32).collect();
+        let mut sequential = Vec::new();
+        top_node(&boxes, &mut ids, &mut sequential);
+        assert_eq!(parallel.len(), 2 * n - 1);
+        assert!(parallel == sequential);
     }
 
     #[test]

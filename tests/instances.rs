@@ -508,3 +508,22 @@ fn a_matrix_and_bulk_instances_place_as_the_tables_do() {
     assert!(e.contains("no material is named \"chrome\""), "{e}");
     assert_eq!(bulk.instances.len(), n);
 }
+
+/// The fuzzers' seed with instances (a hidden named mesh, a mirrored one, a `matrix`, a
+/// drawn named mesh, a sphere and a triangle) is a valid scene, so that their mutants reach
+/// the two-level build and traversal (the mesh is served from memory).
+#[test]
+fn the_fuzz_seed_with_instances_reaches_the_two_levels() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for target in ["scene_parse", "dict_load"] {
+        let d = std::fs::read(root.join("fuzz/seeds").join(target).join("instances.toml")).unwrap();
+        assert_eq!(glint::fuzzing::scene_parse(&d), Ok(()), "{target}");
+        let text = std::str::from_utf8(&d).unwrap();
+        let scene = Scene::parse_with(text, "fuzz.toml".as_ref(), &|p| {
+            std::fs::read(root.join("scenes").join(p.file_name().unwrap()))
+                .or_else(|_| Ok(glint::fuzzing::FUZZ_MESH_OBJ.as_bytes().to_vec()))
+        })
+        .unwrap();
+        assert_eq!(scene.instances.len(), 3);
+    }
+}
