@@ -9,6 +9,11 @@
 # (see their README):
 #   PEERS=../shared/peers VENV=~/peers/venv bash benches/peers.sh bench-out/peers
 # Output: OUT/peers.md (the side-by-side table), OUT/glint-rN/ and OUT/mitsuba-rN.jsonl.
+# INSTANCES=1 measures the instanced scenes instead (benches/instances_scene.py: 100 and
+# 10,000 Stanford dragons on a ground plane, with and without shadows; needs
+# scenes/meshes/dragon_full.obj.gz from scenes/fetch-meshes.sh): glint's bench beside
+# benches/instances_mitsuba.py (the mesh in a `shapegroup`, N `instance`s), ROUNDS rounds.
+# Output: OUT/instances.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-bench-out/peers}
@@ -17,6 +22,49 @@ peers=$(cd "${PEERS:-../shared/peers}" && pwd)
 . "${VENV:-$HOME/peers/venv}/bin/activate"
 mkdir -p "$out"
 cargo build --release --locked -q
+if [ "${INSTANCES:-0}" = 1 ]; then
+  gzip -dc scenes/meshes/dragon_full.obj.gz > "$out/dragon_full.obj"
+  scenes=()
+  for n in 100 10000; do
+    python3 benches/instances_scene.py --count "$n" --out "$out" >/dev/null
+    sed 's/^shadows = true/shadows = false/' "$out/dragons_$n.toml" > "$out/dragons_${n}_noshadow.toml"
+    scenes+=("$out/dragons_$n.toml" "$out/dragons_${n}_noshadow.toml")
+  done
+  for r in $(seq 1 "$rounds"); do
+    echo "== round $r: glint $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg)"
+    ./target/release/glint bench "${scenes[@]}" --runs 5 --triangle watertight --no-gpu \
+      --out "$out/glint-instances-r$r" 2>/dev/null | grep cpu-f32
+    : > "$out/mitsuba-instances-r$r.jsonl"
+    for n in 100 10000; do
+      echo "== round $r: mitsuba N=$n $(date -u +%FT%TZ)"
+      python3 -u benches/instances_mitsuba.py "$out/dragons_$n.toml" --obj "$out/dragon_full.obj" \
+        --reps 3 >> "$out/mitsuba-instances-r$r.jsonl"
+    done
+  done
+  python3 - "$out" "$rounds" <<'PY' | tee "$out/instances.md"
+import json, statistics, sys
+out, rounds = sys.argv[1], int(sys.argv[2])
+glint, mitsuba = {}, {}
+for r in range(1, rounds + 1):
+    for row in json.load(open(f"{out}/glint-instances-r{r}/report.json"))["rows"]:
+        if row["tracer"] == "cpu-f32":
+            glint.setdefault(row["scene"], []).append(row["median_ms"])
+    for line in open(f"{out}/mitsuba-instances-r{r}.jsonl"):
+        m = json.loads(line)
+        mitsuba.setdefault((m["instances"], m["integrator"]), []).append(1000 * m["median_s"])
+print("| scene | Mitsuba mode | glint ms per round | Mitsuba ms per round | ratio per round | median ratio |")
+print("|---|---|---|---|---|---|")
+for n in (100, 10000):
+    for shadows, mode in ((True, "direct"), (False, "aov")):
+        name = f"dragons_{n}" + ("" if shadows else "_noshadow")
+        g, m = glint.get(name, []), mitsuba.get((n, mode), [])
+        ratios = [a / b for a, b in zip(g, m)]
+        fmt = lambda xs, f: ", ".join(f.format(x) for x in xs)
+        print(f"| {name} | {mode} | {fmt(g, '{:.1f}')} | {fmt(m, '{:.1f}')} | {fmt(ratios, '{:.2f}')} "
+              f"| **{statistics.median(ratios):.2f}** |")
+PY
+  exit 0
+fi
 scenes=()
 for t in 2 100000 1000000; do
   python3 benches/peer_scene.py --peers "$peers" --tris "$t" --spheres 10 --out "$out" >/dev/null

@@ -5,6 +5,10 @@ use super::format::{InstanceFile, MeshFile};
 use super::mesh::Transform;
 use super::*;
 
+/// The most instances a scene may hold (file and bulk together): 2^24, 2 GiB of instance
+/// records on the device, and the top level's node indices far inside u32.
+pub const MAX_INSTANCES: usize = 1 << 24;
+
 /// Mesh entry `i`'s name and visibility, its triangles being `triangles`: `None` where it
 /// has no name. A second mesh of the same name, or `hidden` without a name, is an error.
 pub(super) fn named_mesh(
@@ -54,6 +58,13 @@ pub(super) fn instances(
     names: &[String],
     uvs: &[TextureCoords],
 ) -> Result<Vec<Instance>, SceneError> {
+    if let Some(e) = entries.get(MAX_INSTANCES) {
+        return v.err(
+            e.span(),
+            &format!("instances[{MAX_INSTANCES}]"),
+            format!("more than {MAX_INSTANCES} instances"),
+        );
+    }
     let mut out = Vec::with_capacity(entries.len());
     for (i, e) in entries.iter().enumerate() {
         let e = e.get_ref();
@@ -270,6 +281,12 @@ impl Scene {
                 Some(i as u32)
             }
         };
+        if self.instances.len() + to_world.len() > MAX_INSTANCES {
+            return Err(InstancesError::TooMany {
+                have: self.instances.len(),
+                adding: to_world.len(),
+            });
+        }
         let mut added = Vec::with_capacity(to_world.len());
         for (index, m) in to_world.iter().enumerate() {
             let (w, o) = maps_of_matrix(m).map_err(|why| InstancesError::Map { index, why })?;
@@ -302,6 +319,17 @@ pub enum InstancesError {
     /// The mesh is textured: a material cannot replace its own.
     #[error("mesh {0:?} is textured: an instance's material replaces only an untextured mesh's")]
     Textured(String),
+    /// More than [`MAX_INSTANCES`] in all.
+    #[error(
+        "{have} instances and {adding} more exceed the most a scene holds, {}",
+        MAX_INSTANCES
+    )]
+    TooMany {
+        /// The scene's instances.
+        have: usize,
+        /// The maps given.
+        adding: usize,
+    },
     /// A map is refused.
     #[error("map {index}: {why}")]
     Map {

@@ -6,7 +6,7 @@ mod error;
 mod format;
 mod gltf;
 mod instance;
-pub use instance::{InstancesError, maps_of_matrix};
+pub use instance::{InstancesError, MAX_INSTANCES, maps_of_matrix};
 mod mesh;
 mod obj;
 mod ply;
