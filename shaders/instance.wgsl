@@ -138,6 +138,9 @@ fn nearer_in(t: f32, inst: u32, id: u32, best: Hit) -> bool {
 /// the world ray is restored. One stack holds both levels (each at most `BVH_STACK` deep).
 fn closest_hit_top(ray: Ray, t_min: f32, t_max: f32) -> Hit {
     var best = Hit(t_max, PRIM_NONE, 0.0, 0.0, 0u);
+    if params.n_nodes == 0u {
+        return best;
+    }
     let world_inv = div3_rn(vec3<f32>(1.0), ray.dir);
     let world_sh = ray_shear(ray.dir);
     let root = box_interval(nodes[0], ray.origin, world_inv, t_min, t_max);
@@ -217,6 +220,9 @@ fn closest_hit_top(ray: Ray, t_min: f32, t_max: f32) -> Hit {
 /// hit. `skip` is primitive `skip` of instance `skip_inst` only: the same triangle placed
 /// elsewhere shadows as any other.
 fn occluded_top(ray: Ray, t_min: f32, t_max: f32, skip: u32, skip_inst: u32) -> bool {
+    if params.n_nodes == 0u {
+        return false;
+    }
     let world_inv = div3_rn(vec3<f32>(1.0), ray.dir);
     let world_sh = ray_shear(ray.dir);
     let root = box_interval(nodes[0], ray.origin, world_inv, t_min, t_max);

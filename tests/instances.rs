@@ -527,3 +527,43 @@ fn the_fuzz_seed_with_instances_reaches_the_two_levels() {
         assert_eq!(scene.instances.len(), 3);
     }
 }
+
+/// A scene edited in memory is checked as a file is: an instance of no mesh, a named mesh
+/// outside the triangles, a map that is not finite are errors naming the field, not panics.
+#[test]
+fn instances_edited_in_memory_are_validated() {
+    let good = many("[-2.5, 0.0, -1.0]");
+    good.validate().unwrap();
+    let mut s = good.clone();
+    s.instances[1].mesh = 7;
+    assert!(
+        s.validate()
+            .unwrap_err()
+            .to_string()
+            .contains("instances[1].mesh")
+    );
+    let mut s = good.clone();
+    s.instances[0].to_object[2][3] = f32::NAN;
+    assert!(
+        s.validate()
+            .unwrap_err()
+            .to_string()
+            .contains("instances[0].to_object")
+    );
+    let mut s = good.clone();
+    s.named[0].triangles = 0..s.triangles.len() + 1;
+    assert!(
+        s.validate()
+            .unwrap_err()
+            .to_string()
+            .contains("named[0].triangles")
+    );
+    let mut s = good.clone();
+    s.instances[2].material = Some(99);
+    assert!(
+        s.validate()
+            .unwrap_err()
+            .to_string()
+            .contains("instances[2].material")
+    );
+}

@@ -164,6 +164,9 @@ pub fn closest_hit_top<R: Real, C: Count>(
         v: R::ZERO,
         inst: 0,
     };
+    if g.buf.params.n_nodes == 0 {
+        return best;
+    }
     let nodes = &g.buf.nodes;
     let world_inv = V3::splat(R::ONE) / ray.dir;
     let world_sh = ray_shear(g, ray.dir);
@@ -263,6 +266,9 @@ pub fn occluded_top<R: Real, C: Count>(
     skip: u32,
     skip_inst: u32,
 ) -> bool {
+    if g.buf.params.n_nodes == 0 {
+        return false;
+    }
     let nodes = &g.buf.nodes;
     let world_inv = V3::splat(R::ONE) / ray.dir;
     let world_sh = ray_shear(g, ray.dir);

@@ -241,6 +241,44 @@ impl Scene {
             radius(s.radius).map_err(at(&format!("spheres[{i}].radius")))?;
             material(s.material, &|| format!("spheres[{i}].material"))?;
         }
+        for (k, m) in self.named.iter().enumerate() {
+            let r = &m.triangles;
+            if r.is_empty() || r.end > self.triangles.len() {
+                return Err(err(
+                    format!("named[{k}].triangles"),
+                    format!(
+                        "mesh {:?}: {r:?} is not a nonempty range of the scene's {} triangles",
+                        m.name,
+                        self.triangles.len()
+                    ),
+                ));
+            }
+        }
+        if self.instances.len() > super::MAX_INSTANCES {
+            return Err(err(
+                "instances".into(),
+                format!("more than {} instances", super::MAX_INSTANCES),
+            ));
+        }
+        for (i, x) in self.instances.iter().enumerate() {
+            if x.mesh >= self.named.len() {
+                return Err(err(
+                    format!("instances[{i}].mesh"),
+                    format!("#{} names no mesh ({} are named)", x.mesh, self.named.len()),
+                ));
+            }
+            if let Some(m) = x.material {
+                material(m, &|| format!("instances[{i}].material"))?;
+            }
+            for (key, map) in [("to_world", &x.to_world), ("to_object", &x.to_object)] {
+                if !map.iter().flatten().all(|v| v.is_finite()) {
+                    return Err(err(
+                        format!("instances[{i}].{key}"),
+                        format!("{map:?} is not finite"),
+                    ));
+                }
+            }
+        }
         // A mesh scene has a million triangles: one branch-free pass over them on every
         // core, and the loop that names the culprit only where that pass finds one.
         use rayon::prelude::*;
