@@ -186,28 +186,24 @@ impl SceneBuffers {
             scene.instances.is_empty() && o.spheres == spheres && o.triangles == triangles
         });
         let reused = kept.is_some();
-        let mut instances = Vec::new();
         let tree = match kept {
-            Some(old) => (old.nodes, old.prim_ids),
+            Some(old) => (old.nodes, old.prim_ids, Vec::new()),
             None if !scene.instances.is_empty() => {
                 let cache = scene.cache.as_deref();
                 let two = crate::two_level::build(scene, &spheres, &triangles, &|s, t| {
                     cached_bvh(cache, &stages, s, t)
                 });
-                instances = two.instances;
-                (two.nodes, two.prim_ids)
+                (two.nodes, two.prim_ids, two.instances)
             }
             None => {
                 let bvh = cached_bvh(scene.cache.as_deref(), &stages, &spheres, &triangles);
-                (bvh.nodes, bvh.prim_ids)
+                (bvh.nodes, bvh.prim_ids, Vec::new())
             }
         };
-        let n_instances = instances.len() as u32;
         let buf = SceneBuffers {
             normals,
             uvs,
             texels,
-            instances,
             stages: Timings(stages.into_times()),
             ..SceneBuffers::with_bvh(
                 params,
@@ -219,13 +215,6 @@ impl SceneBuffers {
                 algo,
                 scene.shadows,
             )
-        };
-        let buf = SceneBuffers {
-            params: Params {
-                n_instances,
-                ..buf.params
-            },
-            ..buf
         };
         (buf, reused)
     }
@@ -295,14 +284,14 @@ impl SceneBuffers {
                 triangles,
                 materials,
                 lights,
-                (bvh.nodes, bvh.prim_ids),
+                (bvh.nodes, bvh.prim_ids, Vec::new()),
                 algo,
                 shadows,
             )
         }
     }
 
-    /// The buffers of these parts over the BVH `(nodes, prim_ids)` built for them: the
+    /// The buffers of these parts over the BVH `(nodes, prim_ids, instances)` built for them: the
     /// counts in `params` set from the parts, `samples` at least 1, no triangle smooth or
     /// textured.
     #[allow(clippy::too_many_arguments)]
@@ -312,12 +301,13 @@ impl SceneBuffers {
         triangles: Vec<Triangle>,
         materials: Vec<Material>,
         lights: Vec<Light>,
-        (nodes, prim_ids): (Vec<BvhNode>, Vec<u32>),
+        (nodes, prim_ids, instances): (Vec<BvhNode>, Vec<u32>, Vec<Instance>),
         algo: TriangleAlgorithm,
         shadows: bool,
     ) -> Self {
         SceneBuffers {
             params: Params {
+                n_instances: instances.len() as u32,
                 n_spheres: spheres.len() as u32,
                 n_triangles: triangles.len() as u32,
                 n_lights: lights.len() as u32,
@@ -331,7 +321,7 @@ impl SceneBuffers {
             lights,
             nodes,
             prim_ids,
-            instances: Vec::new(),
+            instances,
             normals: Vec::new(),
             uvs: Vec::new(),
             texels: Vec::new(),

@@ -62,23 +62,20 @@ pub fn build(
 
     let mut out = TwoLevel::default();
     let mut bottoms: Vec<(Bvh, u32)> = Vec::new(); // (tree, id offset; u32::MAX: own ids)
-    let mut roots: Vec<Option<Box3>> = Vec::new(); // each bottom tree's root box
-    let mut push_bottom = |tree: Bvh, offset: u32, bottoms: &mut Vec<(Bvh, u32)>| {
-        let root = tree.nodes.first().map(|n| (n.lo, n.hi));
-        roots.push(root);
-        bottoms.push((tree, offset));
-        roots.len() - 1
-    };
     let own: Vec<Triangle> = own_ids.iter().map(|&k| triangles[k as usize]).collect();
-    let own_tree = push_bottom(bvh(spheres, &own), u32::MAX, &mut bottoms);
+    let own_tree = bottoms.len();
+    bottoms.push((bvh(spheres, &own), u32::MAX));
     drop(own);
     let mut mesh_tree = vec![usize::MAX; scene.named.len()];
     for (k, m) in scene.named.iter().enumerate() {
         if placed[k] {
+            mesh_tree[k] = bottoms.len();
             let tree = bvh(&[], &triangles[m.triangles.clone()]);
-            mesh_tree[k] = push_bottom(tree, m.triangles.start as u32, &mut bottoms);
+            bottoms.push((tree, m.triangles.start as u32));
         }
     }
+    // A bottom tree's root box; none for an empty tree.
+    let root = |t: usize| -> Option<Box3> { bottoms[t].0.nodes.first().map(|n| (n.lo, n.hi)) };
     // Lay the bottom trees out after the top level's nodes (2n - 1 for n instances).
     let mut placements: Vec<(usize, Affine, Affine, u32)> =
         vec![(own_tree, IDENTITY, IDENTITY, NO_MATERIAL)];
@@ -95,7 +92,7 @@ pub fn build(
             x.material.unwrap_or(NO_MATERIAL),
         ));
     }
-    placements.retain(|p| roots[p.0].is_some());
+    placements.retain(|p| root(p.0).is_some());
     let n_top = (2 * placements.len()).saturating_sub(1);
     let mut base = vec![0u32; bottoms.len()];
     let mut at = n_top as u32;
@@ -105,7 +102,7 @@ pub fn build(
     }
     let mut boxes = Vec::with_capacity(placements.len());
     for &(tree, to_world, to_object, material) in &placements {
-        let (lo, hi) = roots[tree].expect("retained");
+        let (lo, hi) = root(tree).expect("retained");
         let identity = to_world == IDENTITY && to_object == IDENTITY;
         boxes.push(if identity {
             (lo, hi)

@@ -279,7 +279,6 @@ impl Scene {
     ) -> PyResult<Scene> {
         let maps = affine_rows(py, transforms)?;
         Ok(Scene::new(self.state().with_instances(
-            py,
             &mesh,
             &maps,
             material.as_deref(),
@@ -448,7 +447,6 @@ impl State {
     /// `[[instances]]` tables with `matrix`, so that the text makes the same scene.
     fn with_instances(
         &self,
-        py: Python<'_>,
         mesh: &str,
         maps: &[[[f64; 4]; 3]],
         material: Option<&str>,
@@ -476,7 +474,6 @@ impl State {
             Origin::File(p, ..) => Origin::Text(p.parent().map(PathBuf::from).unwrap_or_default()),
             other => other.clone(),
         };
-        let _ = py;
         Ok(State {
             scene: Arc::new(scene),
             text,

@@ -119,19 +119,9 @@ pub(super) fn instances(
             None => None,
             Some(name) => {
                 let k = v.material_index(names, name, &key("material"))?;
-                let range = &named[mesh].triangles;
-                let textured = uvs
-                    .iter()
-                    .any(|t| t.first < range.end && t.first + t.uvs.len() > range.start);
-                if textured {
-                    return v.err(
-                        name.span(),
-                        &key("material"),
-                        format!(
-                            "mesh {:?} is textured: an instance's material replaces only an untextured mesh's",
-                            named[mesh].name
-                        ),
-                    );
+                if textured(uvs, &named[mesh].triangles) {
+                    let why = InstancesError::Textured(named[mesh].name.clone());
+                    return v.err(name.span(), &key("material"), why.to_string());
                 }
                 Some(k)
             }
@@ -144,6 +134,13 @@ pub(super) fn instances(
         });
     }
     Ok(out)
+}
+
+/// Whether some triangle of `triangles` (a named mesh's) has texture coordinates: its
+/// texture follows its own material, which an instance's material then cannot replace.
+fn textured(uvs: &[TextureCoords], triangles: &std::ops::Range<usize>) -> bool {
+    uvs.iter()
+        .any(|t| t.first < triangles.end && t.first + t.uvs.len() > triangles.start)
 }
 
 /// A hidden mesh that no instance places draws nothing: an error at its `hidden` key.
@@ -270,12 +267,7 @@ impl Scene {
                 let Some(i) = self.materials.iter().position(|m| m.name == name) else {
                     return Err(InstancesError::NoMaterial(name.to_string()));
                 };
-                let range = &self.named[k].triangles;
-                if self
-                    .uvs
-                    .iter()
-                    .any(|t| t.first < range.end && t.first + t.uvs.len() > range.start)
-                {
+                if textured(&self.uvs, &self.named[k].triangles) {
                     return Err(InstancesError::Textured(mesh.to_string()));
                 }
                 Some(i as u32)
