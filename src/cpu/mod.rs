@@ -376,6 +376,17 @@ pub fn render_aov_rows(
 pub trait RecordRows: Send {
     /// Takes `records`, the pixels `x ..` of row `row` of the block (0 its first row).
     fn put(&mut self, row: usize, x: usize, records: &[AovOut]);
+
+    /// Takes a packet's records: pixels `x .. x + cols` of the block's rows `0 .. rows`,
+    /// pixel (x + dx, dy) in lane `dy * PACKET_W + dx` of `lanes`. By default each row
+    /// through [`RecordRows::put`].
+    fn put_lanes(&mut self, x: usize, rows: usize, cols: usize, lanes: &packet::AovLanes) {
+        let pw = packet::PACKET_W as usize;
+        for y in 0..rows {
+            let row: Vec<AovOut> = (0..cols).map(|c| lanes.record(y * pw + c)).collect();
+            self.put(y, x, &row);
+        }
+    }
 }
 
 /// Rows `y0 .. y0 + rows` of [`render_f32_rows`]'s colours, returned, and of
@@ -406,7 +417,8 @@ pub fn render_f32_rows_aov<S: RecordRows>(
     }
     let g = packet_globals(buf, spec);
     let trace = packet::colour_aov_tracer(packet::Simd::Best);
-    let pw = packet::PACKET_W as usize;
+    const PW: usize = packet::PACKET_W as usize;
+    let pw = PW;
     let mut colours = vec![[0.0f32; 4]; w * rows as usize];
     colours
         .par_chunks_mut((w * ph).max(1))
@@ -420,9 +432,14 @@ pub fn render_f32_rows_aov<S: RecordRows>(
                 let cols = pw.min(w - i);
                 for y in 0..n {
                     let (at, lane) = (y * w + i, y * pw);
-                    colour_band[at..at + cols].copy_from_slice(&px[lane..lane + cols]);
-                    block.put(y, i, &rec[lane..lane + cols]);
+                    if cols == PW {
+                        // A copy of a length known here: a move, not a `memmove` call.
+                        colour_band[at..at + PW].copy_from_slice(&px[lane..lane + PW]);
+                    } else {
+                        colour_band[at..at + cols].copy_from_slice(&px[lane..lane + cols]);
+                    }
                 }
+                block.put_lanes(i, n, cols, &rec);
             }
         });
     colours

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use crate::buffers::{AovOut, PRIM_NONE, TRIANGLE_BIT};
+use crate::cpu::packet::AovLanes;
 use crate::image::{ChannelData, ImageError};
 use crate::scene::Scene;
 
@@ -257,6 +258,54 @@ pub struct AovRows<'a> {
     planes: Vec<(Aov, usize, &'a mut [u32])>,
 }
 
+const PW: usize = crate::cpu::packet::PACKET_W as usize;
+
+/// Writes packets `stage` (consecutive, of the same rows) into `plane`'s rows `0 .. rows`
+/// from column `x`, the last packet `last_cols` wide: `f(packet, y)` gives a packet's
+/// row y.
+#[inline(always)]
+fn unstage(
+    plane: &mut [u32],
+    width: usize,
+    (x, rows, last_cols): (usize, usize, usize),
+    stage: &[AovLanes],
+    f: impl Fn(&AovLanes, usize) -> [u32; PW],
+) {
+    let cols = (stage.len() - 1) * PW + last_cols;
+    for y in 0..rows {
+        let row = &mut plane[y * width + x..y * width + x + cols];
+        let mut chunks = row.chunks_exact_mut(PW);
+        for (out, lanes) in (&mut chunks).zip(stage) {
+            out.copy_from_slice(&f(lanes, y));
+        }
+        let rest = chunks.into_remainder();
+        if !rest.is_empty() {
+            let n = rest.len();
+            rest.copy_from_slice(&f(&stage[stage.len() - 1], y)[..n]);
+        }
+    }
+}
+
+/// Row y of a packet's lane array, as bits.
+#[inline(always)]
+fn quad(a: &[f32; crate::cpu::packet::LANES], y: usize) -> [u32; PW] {
+    let mut out = [0u32; PW];
+    for (d, o) in out.iter_mut().enumerate() {
+        *o = a[y * PW + d].to_bits();
+    }
+    out
+}
+
+/// Row y of a packet's ids, each through `f`.
+#[inline(always)]
+fn quad_ids(a: &[u32; crate::cpu::packet::LANES], y: usize, f: impl Fn(u32) -> u32) -> [u32; PW] {
+    let mut out = [0u32; PW];
+    for (d, o) in out.iter_mut().enumerate() {
+        *o = f(a[y * PW + d]);
+    }
+    out
+}
+
 impl crate::cpu::RecordRows for AovRows<'_> {
     fn put(&mut self, row: usize, x: usize, records: &[AovOut]) {
         let at = row * self.width + x;
@@ -275,6 +324,40 @@ impl crate::cpu::RecordRows for AovRows<'_> {
                 Aov::MaterialId => fill(out, records, |r| r.material),
                 Aov::Mask => fill(out, records, |r| {
                     (if r.prim == PRIM_NONE { 0.0f32 } else { 1.0 }).to_bits()
+                }),
+            }
+        }
+    }
+
+    /// Each plane's rows straight from the packet's lane arrays, a row of a packet at a
+    /// time (through records, a 64-byte struct a pixel gathered back into planes, this
+    /// was most of an AOV frame's extra time on a small scene).
+    fn put_lanes(&mut self, x: usize, rows: usize, cols: usize, lanes: &AovLanes) {
+        let (w, ids) = (self.width, self.ids);
+        let at = (x, rows, cols);
+        let one = std::slice::from_ref(lanes);
+        for (aov, c, plane) in &mut self.planes {
+            let c = *c;
+            match aov {
+                Aov::T => unstage(plane, w, at, one, |s, y| quad(&s.t, y)),
+                Aov::Depth => unstage(plane, w, at, one, |s, y| quad(&s.depth, y)),
+                Aov::Position => unstage(plane, w, at, one, |s, y| quad(&s.position[c], y)),
+                Aov::GeoNormal => unstage(plane, w, at, one, |s, y| quad(&s.geo_normal[c], y)),
+                Aov::Normal => unstage(plane, w, at, one, |s, y| quad(&s.normal[c], y)),
+                Aov::Albedo => unstage(plane, w, at, one, |s, y| quad(&s.albedo[c], y)),
+                Aov::PrimId => unstage(plane, w, at, one, |s, y| {
+                    quad_ids(&s.prim, y, |p| ids.prim_id(p))
+                }),
+                Aov::ObjectId => unstage(plane, w, at, one, |s, y| {
+                    quad_ids(&s.prim, y, |p| ids.object_id(p))
+                }),
+                Aov::MaterialId => {
+                    unstage(plane, w, at, one, |s, y| quad_ids(&s.material, y, |m| m))
+                }
+                Aov::Mask => unstage(plane, w, at, one, |s, y| {
+                    quad_ids(&s.prim, y, |p| {
+                        (if p == PRIM_NONE { 0.0f32 } else { 1.0 }).to_bits()
+                    })
                 }),
             }
         }

@@ -32,6 +32,7 @@ mod shade;
 mod trace;
 mod whitted;
 
+pub use aov::AovLanes;
 pub use common::{LANES, Mask, PACKET_H, PACKET_W};
 pub use trace::{NO_SLOT, PacketHits};
 
@@ -152,8 +153,7 @@ unsafe fn aov_packet_avx512(g: &Globals<f32>, i: u32, j: u32) -> [crate::buffers
 
 /// The colours and AOVs of a block's pixels from one traversal: one build of
 /// [`colour_aov_tracer`].
-pub type ColourAovFn =
-    fn(&Globals<f32>, u32, u32) -> ([[f32; 4]; LANES], [crate::buffers::AovOut; LANES]);
+pub type ColourAovFn = fn(&Globals<f32>, u32, u32) -> ([[f32; 4]; LANES], AovLanes);
 
 /// [`trace_packet`] and [`aov_tracer`]'s packet at once, the hits of the camera rays
 /// traced once (build `simd`). For scenes that [`trace_packet`] shades itself: without
@@ -179,11 +179,7 @@ pub fn colour_aov_tracer(simd: Simd) -> ColourAovFn {
 /// The colour and AOV packet compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn colour_aov_avx2(
-    g: &Globals<f32>,
-    i: u32,
-    j: u32,
-) -> ([[f32; 4]; LANES], [crate::buffers::AovOut; LANES]) {
+unsafe fn colour_aov_avx2(g: &Globals<f32>, i: u32, j: u32) -> ([[f32; 4]; LANES], AovLanes) {
     // SAFETY: this function is compiled for AVX2 and runs only where the CPU has it.
     aov::colour_aov_packet_body(unsafe { Avx2::new_unchecked() }, g, i, j)
 }
@@ -191,11 +187,7 @@ unsafe fn colour_aov_avx2(
 /// The colour and AOV packet compiled for AVX-512.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
-unsafe fn colour_aov_avx512(
-    g: &Globals<f32>,
-    i: u32,
-    j: u32,
-) -> ([[f32; 4]; LANES], [crate::buffers::AovOut; LANES]) {
+unsafe fn colour_aov_avx512(g: &Globals<f32>, i: u32, j: u32) -> ([[f32; 4]; LANES], AovLanes) {
     // SAFETY: this function is compiled for AVX-512 F and runs only where the CPU has it.
     aov::colour_aov_packet_body(unsafe { Avx512::new_unchecked() }, g, i, j)
 }

@@ -16,13 +16,28 @@ use crate::cpu::prims::shading_at;
 use crate::cpu::trace::{phong_power, shadow_origin};
 use crate::shared::real::V3;
 
+/// What [`shade_lanes`] found of each lane's hit on its way to the colour: the values the
+/// mirror's `aov_of` computes for the same hit, in every bit (the same operations).
+pub(super) struct HitLanes {
+    /// The hit point, origin + dir · t.
+    pub p: [[f32; LANES]; 3],
+    /// The unit geometric normal, turned to face the ray.
+    pub n: [[f32; LANES]; 3],
+    /// The shading normal (`shading_at`'s).
+    pub ns: [[f32; LANES]; 3],
+    /// The material index.
+    pub material: [u32; LANES],
+}
+
 /// `shade` for the lanes in `mask`, which must all hit something: the same operations in
 /// the same order, lane by lane, with the square roots, divisions and the exponent's
 /// squarings as lane loops. Shadow rays and non-integer exponents go lane by lane
 /// through the mirror's own `occluded` and `phong_power`. `dir` holds the rays'
 /// directions as lane arrays. Lanes outside `mask` compute values that are not used: the
 /// point on their own ray (far off or infinite for a miss), the material and normal of
-/// the primitive of lane `mask`'s first lane.
+/// the primitive of lane `mask`'s first lane. With `facts`, the hits' points, normals
+/// and materials are written there too (untouched where `mask` is empty); a constant
+/// `None` compiles to nothing once inlined.
 #[inline(always)]
 pub(super) fn shade_lanes<B: Build, O: Origins>(
     b: B,
@@ -31,6 +46,7 @@ pub(super) fn shade_lanes<B: Build, O: Origins>(
     dir: &[[f32; LANES]; 3],
     found: &PacketHits,
     mask: Mask,
+    facts: Option<&mut HitLanes>,
 ) -> [[f32; LANES]; 3] {
     let mut color = [[0.0f32; LANES]; 3];
     if mask == 0 {
@@ -185,6 +201,9 @@ pub(super) fn shade_lanes<B: Build, O: Origins>(
             [ns[0][l], ns[1][l], ns[2][l]] = [sh.n.x, sh.n.y, sh.n.z];
             [ps[0][l], ps[1][l], ps[2][l]] = [sh.p.x, sh.p.y, sh.p.z];
         }
+    }
+    if let Some(f) = facts {
+        *f = HitLanes { p, n, ns, material };
     }
     if g.spec.uses_diffuse && diffuse != 0 {
         let mut to_eye = [[0.0f32; LANES]; 3];

@@ -12,7 +12,7 @@ use super::common::{
 use super::prims::{
     ShearLanes, leaf_triangle, prim_lanes, shear_lanes, sphere_lanes, triangle_lanes,
 };
-use super::shade::shade_lanes;
+use super::shade::{HitLanes, shade_lanes};
 use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, PRIM_NONE, TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle,
 };
@@ -664,11 +664,12 @@ pub(super) fn sample_packet<B: Build>(
     dx: f32,
     dy: f32,
 ) -> [[f32; 4]; LANES] {
-    sample_packet_hits::<B>(b, g, i, j, dx, dy).0
+    sample_packet_hits::<B>(b, g, i, j, dx, dy, None).0
 }
 
-/// [`sample_packet`], with the camera rays, their hits and the lanes inside the image,
-/// for a caller that describes the hits further (the AOVs of the same rays).
+/// [`sample_packet`], with the camera rays' directions, their hits and the lanes inside
+/// the image, for a caller that describes the hits further (the AOVs of the same rays);
+/// with `facts`, what the shading found of the hits too (`shade_lanes`).
 #[inline(always)]
 pub(super) fn sample_packet_hits<B: Build>(
     b: B,
@@ -677,7 +678,8 @@ pub(super) fn sample_packet_hits<B: Build>(
     j: u32,
     dx: f32,
     dy: f32,
-) -> ([[f32; 4]; LANES], [Ray<f32>; LANES], PacketHits, Mask) {
+    facts: Option<&mut HitLanes>,
+) -> ([[f32; 4]; LANES], [[f32; LANES]; 3], PacketHits, Mask) {
     let (rays, dir, active) = camera_rays(g, i, j, dx, dy);
     let found = closest_hit_packet::<B>(b, g, &rays, &dir, active, 0.0, f32::MAX);
     let mut hit = [false; LANES];
@@ -685,7 +687,7 @@ pub(super) fn sample_packet_hits<B: Build>(
         hit[l] = found.prim[l] != PRIM_NONE;
     }
     let lit = mask_of(&hit);
-    let colors = shade_lanes::<B, _>(b, g, &Shared(g.cam.eye), &dir, &found, lit & active);
+    let colors = shade_lanes::<B, _>(b, g, &Shared(g.cam.eye), &dir, &found, lit & active, facts);
     // Loops, not `array::from_fn`: that is a generic function of its own, compiled once
     // for the baseline instruction set and called from every build.
     let bg = g.buf.params.background;
@@ -698,7 +700,7 @@ pub(super) fn sample_packet_hits<B: Build>(
     if g.spec.whitted {
         super::whitted::secondary_lanes::<B>(b, g, &rays, &found, lit & active, &mut out);
     }
-    (out, rays, found, active)
+    (out, dir, found, active)
 }
 
 #[cfg(test)]
