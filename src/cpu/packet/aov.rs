@@ -103,8 +103,8 @@ pub(super) fn colour_aov_packet_body<B: Build>(
         ns: [[0.0; LANES]; 3],
         material: [0; LANES],
     };
-    let (colours, dir, found, active) =
-        sample_packet_hits::<B>(b, g, i, j, half, half, Some(&mut facts));
+    let (colours, rays, found, active) =
+        sample_packet_hits::<B, _>(b, g, i, j, half, half, &mut facts);
     let mut hit = [false; LANES];
     for l in 0..LANES {
         hit[l] = (active >> l) & 1 != 0 && found.prim[l] != PRIM_NONE;
@@ -122,7 +122,8 @@ pub(super) fn colour_aov_packet_body<B: Build>(
     };
     for l in 0..LANES {
         let t = found.t[l];
-        let depth = t * (dir[0][l] * f.x + dir[1][l] * f.y + dir[2][l] * f.z);
+        let d = rays[l].dir;
+        let depth = t * (d.x * f.x + d.y * f.y + d.z * f.z);
         out.t[l] = if hit[l] { t } else { MISS.t };
         out.depth[l] = if hit[l] { depth } else { MISS.depth };
         out.prim[l] = if hit[l] { found.prim[l] } else { PRIM_NONE };

@@ -29,24 +29,61 @@ pub(super) struct HitLanes {
     pub material: [u32; LANES],
 }
 
+/// Where [`shade_lanes`] puts what it found of the hits: nowhere (`()`, the colour alone:
+/// no code at all), or a [`HitLanes`].
+pub(super) trait Facts {
+    /// Takes the hits' points, facing geometric normals, shading normals and materials.
+    fn put(
+        &mut self,
+        p: &[[f32; LANES]; 3],
+        n: &[[f32; LANES]; 3],
+        ns: &[[f32; LANES]; 3],
+        material: &[u32; LANES],
+    );
+}
+
+impl Facts for () {
+    #[inline(always)]
+    fn put(
+        &mut self,
+        _: &[[f32; LANES]; 3],
+        _: &[[f32; LANES]; 3],
+        _: &[[f32; LANES]; 3],
+        _: &[u32; LANES],
+    ) {
+    }
+}
+
+impl Facts for HitLanes {
+    #[inline(always)]
+    fn put(
+        &mut self,
+        p: &[[f32; LANES]; 3],
+        n: &[[f32; LANES]; 3],
+        ns: &[[f32; LANES]; 3],
+        material: &[u32; LANES],
+    ) {
+        (self.p, self.n, self.ns, self.material) = (*p, *n, *ns, *material);
+    }
+}
+
 /// `shade` for the lanes in `mask`, which must all hit something: the same operations in
 /// the same order, lane by lane, with the square roots, divisions and the exponent's
 /// squarings as lane loops. Shadow rays and non-integer exponents go lane by lane
 /// through the mirror's own `occluded` and `phong_power`. `dir` holds the rays'
 /// directions as lane arrays. Lanes outside `mask` compute values that are not used: the
 /// point on their own ray (far off or infinite for a miss), the material and normal of
-/// the primitive of lane `mask`'s first lane. With `facts`, the hits' points, normals
-/// and materials are written there too (untouched where `mask` is empty); a constant
-/// `None` compiles to nothing once inlined.
+/// the primitive of lane `mask`'s first lane. The hits' points, normals and materials go
+/// to `facts` too (not where `mask` is empty).
 #[inline(always)]
-pub(super) fn shade_lanes<B: Build, O: Origins>(
+pub(super) fn shade_lanes<B: Build, O: Origins, F: Facts>(
     b: B,
     g: &Globals<f32>,
     origins: &O,
     dir: &[[f32; LANES]; 3],
     found: &PacketHits,
     mask: Mask,
-    facts: Option<&mut HitLanes>,
+    facts: &mut F,
 ) -> [[f32; LANES]; 3] {
     let mut color = [[0.0f32; LANES]; 3];
     if mask == 0 {
@@ -202,9 +239,7 @@ pub(super) fn shade_lanes<B: Build, O: Origins>(
             [ps[0][l], ps[1][l], ps[2][l]] = [sh.p.x, sh.p.y, sh.p.z];
         }
     }
-    if let Some(f) = facts {
-        *f = HitLanes { p, n, ns, material };
-    }
+    facts.put(&p, &n, &ns, &material);
     if g.spec.uses_diffuse && diffuse != 0 {
         let mut to_eye = [[0.0f32; LANES]; 3];
         for l in 0..LANES {

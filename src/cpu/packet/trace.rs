@@ -12,7 +12,7 @@ use super::common::{
 use super::prims::{
     ShearLanes, leaf_triangle, prim_lanes, shear_lanes, sphere_lanes, triangle_lanes,
 };
-use super::shade::{HitLanes, shade_lanes};
+use super::shade::{Facts, shade_lanes};
 use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, PRIM_NONE, TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle,
 };
@@ -664,22 +664,22 @@ pub(super) fn sample_packet<B: Build>(
     dx: f32,
     dy: f32,
 ) -> [[f32; 4]; LANES] {
-    sample_packet_hits::<B>(b, g, i, j, dx, dy, None).0
+    sample_packet_hits::<B, _>(b, g, i, j, dx, dy, &mut ()).0
 }
 
-/// [`sample_packet`], with the camera rays' directions, their hits and the lanes inside
-/// the image, for a caller that describes the hits further (the AOVs of the same rays);
-/// with `facts`, what the shading found of the hits too (`shade_lanes`).
+/// [`sample_packet`], with the camera rays, their hits and the lanes inside the image, for
+/// a caller that describes the hits further (the AOVs of the same rays), with what the
+/// shading found of the hits in `facts` (`shade_lanes`).
 #[inline(always)]
-pub(super) fn sample_packet_hits<B: Build>(
+pub(super) fn sample_packet_hits<B: Build, F: Facts>(
     b: B,
     g: &Globals<f32>,
     i: u32,
     j: u32,
     dx: f32,
     dy: f32,
-    facts: Option<&mut HitLanes>,
-) -> ([[f32; 4]; LANES], [[f32; LANES]; 3], PacketHits, Mask) {
+    facts: &mut F,
+) -> ([[f32; 4]; LANES], [Ray<f32>; LANES], PacketHits, Mask) {
     let (rays, dir, active) = camera_rays(g, i, j, dx, dy);
     let found = closest_hit_packet::<B>(b, g, &rays, &dir, active, 0.0, f32::MAX);
     let mut hit = [false; LANES];
@@ -687,7 +687,8 @@ pub(super) fn sample_packet_hits<B: Build>(
         hit[l] = found.prim[l] != PRIM_NONE;
     }
     let lit = mask_of(&hit);
-    let colors = shade_lanes::<B, _>(b, g, &Shared(g.cam.eye), &dir, &found, lit & active, facts);
+    let colors =
+        shade_lanes::<B, _, _>(b, g, &Shared(g.cam.eye), &dir, &found, lit & active, facts);
     // Loops, not `array::from_fn`: that is a generic function of its own, compiled once
     // for the baseline instruction set and called from every build.
     let bg = g.buf.params.background;
@@ -700,7 +701,7 @@ pub(super) fn sample_packet_hits<B: Build>(
     if g.spec.whitted {
         super::whitted::secondary_lanes::<B>(b, g, &rays, &found, lit & active, &mut out);
     }
-    (out, dir, found, active)
+    (out, rays, found, active)
 }
 
 #[cfg(test)]

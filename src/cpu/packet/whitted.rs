@@ -125,7 +125,7 @@ pub(super) fn secondary_lanes<B: Build>(
         for l in 0..LANES {
             hit |= (((live >> l) & 1 != 0 && hits.prim[l] != PRIM_NONE) as Mask) << l;
         }
-        let shaded = shade_lanes::<B, _>(b, g, &r.origin, &d, &hits, hit, None);
+        let shaded = shade_lanes::<B, _, _>(b, g, &r.origin, &d, &hits, hit, &mut ());
         for l in 0..LANES {
             if (live >> l) & 1 == 0 {
                 continue;
