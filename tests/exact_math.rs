@@ -255,8 +255,11 @@ const TWINS: [&str; 3] = [
     "vertex grid moller-trumbore at [0.0, 0.0, 0.0]",
 ];
 
-#[test]
-fn every_gpu_test_scene_is_the_mirror_under_an_inexact_driver() {
+/// Every GPU test scene whose index in `scenes()` is `half` modulo 2, through its own
+/// pipeline with exact math under the simulated inexact driver, is the mirror in every
+/// bit; on the twins among them fast math is not. (The sweep is two tests so that the
+/// harness compiles their pipelines on two threads: a cold lavapipe spends minutes on it.)
+fn inexact_driver_sweep(half: usize) {
     let Some(gpu) = common::gpu() else { return };
     assert!(
         common::bit_exact_expected(gpu),
@@ -271,8 +274,14 @@ fn every_gpu_test_scene_is_the_mirror_under_an_inexact_driver() {
         math: Math::Fast,
         inexact_driver: true,
     };
+    let all = scenes();
+    let twins = all
+        .iter()
+        .enumerate()
+        .filter(|(k, (name, _))| k % 2 == half && TWINS.contains(&name.as_str()))
+        .count();
     let mut fast_differs = Vec::new();
-    for (name, scene) in scenes() {
+    for (name, scene) in all.into_iter().skip(half).step_by(2) {
         let d = scene_diff(gpu, &scene, exact);
         assert!(d.bit_exact(), "{name}, exact math, inexact driver: {d:?}");
         // The twin, on three scenes: the driver's raw (perturbed) results differ.
@@ -285,11 +294,39 @@ fn every_gpu_test_scene_is_the_mirror_under_an_inexact_driver() {
             fast_differs.push(!f.bit_exact());
         }
     }
-    assert_eq!(fast_differs.len(), TWINS.len(), "a twin scene is missing");
+    assert_eq!(fast_differs.len(), twins, "a twin scene is missing");
     assert!(
         fast_differs.iter().all(|&d| d),
         "fast math gave the mirror's bits: {fast_differs:?}"
     );
+}
+
+#[test]
+fn every_gpu_test_scene_is_the_mirror_under_an_inexact_driver() {
+    inexact_driver_sweep(0);
+}
+
+#[test]
+fn every_gpu_test_scene_is_the_mirror_under_an_inexact_driver_second_half() {
+    inexact_driver_sweep(1);
+}
+
+/// Both halves together hold every scene once and every twin.
+#[test]
+fn the_inexact_driver_sweep_covers_every_scene_and_twin() {
+    let names: Vec<String> = scenes().into_iter().map(|(n, _)| n).collect();
+    let halves: Vec<Vec<&String>> = (0..2)
+        .map(|h| names.iter().skip(h).step_by(2).collect())
+        .collect();
+    assert_eq!(halves[0].len() + halves[1].len(), names.len());
+    for t in TWINS {
+        assert!(names.iter().any(|n| n == t), "twin {t} is not a scene");
+    }
+    let twins: usize = halves
+        .iter()
+        .map(|h| h.iter().filter(|n| TWINS.contains(&n.as_str())).count())
+        .sum();
+    assert_eq!(twins, TWINS.len(), "every twin in one half");
 }
 
 /// `glint compare SCENE --inexact-driver [extra]` on the tests' adapter: exit status and
