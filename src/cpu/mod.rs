@@ -381,10 +381,10 @@ pub trait RecordRows: Send {
     /// pixel (x + dx, dy) in lane `dy * PACKET_W + dx` of `lanes`. By default each row
     /// through [`RecordRows::put`].
     fn put_lanes(&mut self, x: usize, rows: usize, cols: usize, lanes: &packet::AovLanes) {
-        let pw = packet::PACKET_W as usize;
+        const PW: usize = packet::PACKET_W as usize;
         for y in 0..rows {
-            let row: Vec<AovOut> = (0..cols).map(|c| lanes.record(y * pw + c)).collect();
-            self.put(y, x, &row);
+            let row: [AovOut; PW] = std::array::from_fn(|c| lanes.record(y * PW + c));
+            self.put(y, x, &row[..cols]);
         }
     }
 }
@@ -418,7 +418,6 @@ pub fn render_f32_rows_aov<S: RecordRows>(
     let g = packet_globals(buf, spec);
     let trace = packet::colour_aov_tracer(packet::Simd::Best);
     const PW: usize = packet::PACKET_W as usize;
-    let pw = PW;
     let mut colours = vec![[0.0f32; 4]; w * rows as usize];
     colours
         .par_chunks_mut((w * ph).max(1))
@@ -427,11 +426,11 @@ pub fn render_f32_rows_aov<S: RecordRows>(
         .for_each(|(b, (colour_band, mut block))| {
             let j = y0 + (b * ph) as u32;
             let n = colour_band.len() / w.max(1);
-            for i in (0..w).step_by(pw) {
+            for i in (0..w).step_by(PW) {
                 let (px, rec) = trace(&g, i as u32, j);
-                let cols = pw.min(w - i);
+                let cols = PW.min(w - i);
                 for y in 0..n {
-                    let (at, lane) = (y * w + i, y * pw);
+                    let (at, lane) = (y * w + i, y * PW);
                     if cols == PW {
                         // A copy of a length known here: a move, not a `memmove` call.
                         colour_band[at..at + PW].copy_from_slice(&px[lane..lane + PW]);

@@ -260,28 +260,29 @@ pub struct AovRows<'a> {
 
 const PW: usize = crate::cpu::packet::PACKET_W as usize;
 
-/// Writes packets `stage` (consecutive, of the same rows) into `plane`'s rows `0 .. rows`
-/// from column `x`, the last packet `last_cols` wide: `f(packet, y)` gives a packet's
-/// row y.
+/// Writes `packets` (consecutive, of the same rows; `put_lanes` gives one) into `plane`'s
+/// rows `0 .. rows` from column `x`, the last packet `last_cols` wide: `f(packet, y)`
+/// gives a packet's row y. (Written for a run of packets, it compiles to faster code for
+/// one than a loop written for one packet did: bb8 with five AOVs, 17.0 against 23.0 ms.)
 #[inline(always)]
-fn unstage(
+fn put_packets(
     plane: &mut [u32],
     width: usize,
     (x, rows, last_cols): (usize, usize, usize),
-    stage: &[AovLanes],
+    packets: &[AovLanes],
     f: impl Fn(&AovLanes, usize) -> [u32; PW],
 ) {
-    let cols = (stage.len() - 1) * PW + last_cols;
+    let cols = (packets.len() - 1) * PW + last_cols;
     for y in 0..rows {
         let row = &mut plane[y * width + x..y * width + x + cols];
         let mut chunks = row.chunks_exact_mut(PW);
-        for (out, lanes) in (&mut chunks).zip(stage) {
+        for (out, lanes) in (&mut chunks).zip(packets) {
             out.copy_from_slice(&f(lanes, y));
         }
         let rest = chunks.into_remainder();
         if !rest.is_empty() {
             let n = rest.len();
-            rest.copy_from_slice(&f(&stage[stage.len() - 1], y)[..n]);
+            rest.copy_from_slice(&f(&packets[packets.len() - 1], y)[..n]);
         }
     }
 }
@@ -339,22 +340,22 @@ impl crate::cpu::RecordRows for AovRows<'_> {
         for (aov, c, plane) in &mut self.planes {
             let c = *c;
             match aov {
-                Aov::T => unstage(plane, w, at, one, |s, y| quad(&s.t, y)),
-                Aov::Depth => unstage(plane, w, at, one, |s, y| quad(&s.depth, y)),
-                Aov::Position => unstage(plane, w, at, one, |s, y| quad(&s.position[c], y)),
-                Aov::GeoNormal => unstage(plane, w, at, one, |s, y| quad(&s.geo_normal[c], y)),
-                Aov::Normal => unstage(plane, w, at, one, |s, y| quad(&s.normal[c], y)),
-                Aov::Albedo => unstage(plane, w, at, one, |s, y| quad(&s.albedo[c], y)),
-                Aov::PrimId => unstage(plane, w, at, one, |s, y| {
+                Aov::T => put_packets(plane, w, at, one, |s, y| quad(&s.t, y)),
+                Aov::Depth => put_packets(plane, w, at, one, |s, y| quad(&s.depth, y)),
+                Aov::Position => put_packets(plane, w, at, one, |s, y| quad(&s.position[c], y)),
+                Aov::GeoNormal => put_packets(plane, w, at, one, |s, y| quad(&s.geo_normal[c], y)),
+                Aov::Normal => put_packets(plane, w, at, one, |s, y| quad(&s.normal[c], y)),
+                Aov::Albedo => put_packets(plane, w, at, one, |s, y| quad(&s.albedo[c], y)),
+                Aov::PrimId => put_packets(plane, w, at, one, |s, y| {
                     quad_ids(&s.prim, y, |p| ids.prim_id(p))
                 }),
-                Aov::ObjectId => unstage(plane, w, at, one, |s, y| {
+                Aov::ObjectId => put_packets(plane, w, at, one, |s, y| {
                     quad_ids(&s.prim, y, |p| ids.object_id(p))
                 }),
                 Aov::MaterialId => {
-                    unstage(plane, w, at, one, |s, y| quad_ids(&s.material, y, |m| m))
+                    put_packets(plane, w, at, one, |s, y| quad_ids(&s.material, y, |m| m))
                 }
-                Aov::Mask => unstage(plane, w, at, one, |s, y| {
+                Aov::Mask => put_packets(plane, w, at, one, |s, y| {
                     quad_ids(&s.prim, y, |p| {
                         (if p == PRIM_NONE { 0.0f32 } else { 1.0 }).to_bits()
                     })

@@ -110,28 +110,46 @@ pub(super) fn colour_aov_packet_body<B: Build>(
         hit[l] = (active >> l) & 1 != 0 && found.prim[l] != PRIM_NONE;
     }
     let f = g.cam.forward;
+    // Every lane starts as `MISS`; a lane that hit takes its own values.
+    let splat = |v: [f32; 3]| [[v[0]; LANES], [v[1]; LANES], [v[2]; LANES]];
     let mut out = AovLanes {
-        t: [0.0; LANES],
-        depth: [0.0; LANES],
-        position: [[0.0; LANES]; 3],
-        geo_normal: [[0.0; LANES]; 3],
-        normal: [[0.0; LANES]; 3],
-        albedo: [[0.0; LANES]; 3],
-        prim: [PRIM_NONE; LANES],
-        material: [PRIM_NONE; LANES],
+        t: [MISS.t; LANES],
+        depth: [MISS.depth; LANES],
+        position: splat(MISS.position),
+        geo_normal: splat(MISS.geo_normal),
+        normal: splat(MISS.normal),
+        albedo: splat(MISS.albedo),
+        prim: [MISS.prim; LANES],
+        material: [MISS.material; LANES],
     };
     for l in 0..LANES {
         let t = found.t[l];
         let d = rays[l].dir;
         let depth = t * (d.x * f.x + d.y * f.y + d.z * f.z);
-        out.t[l] = if hit[l] { t } else { MISS.t };
-        out.depth[l] = if hit[l] { depth } else { MISS.depth };
-        out.prim[l] = if hit[l] { found.prim[l] } else { PRIM_NONE };
-        out.material[l] = if hit[l] { facts.material[l] } else { PRIM_NONE };
+        out.t[l] = if hit[l] { t } else { out.t[l] };
+        out.depth[l] = if hit[l] { depth } else { out.depth[l] };
+        out.prim[l] = if hit[l] { found.prim[l] } else { out.prim[l] };
+        out.material[l] = if hit[l] {
+            facts.material[l]
+        } else {
+            out.material[l]
+        };
         for k in 0..3 {
-            out.position[k][l] = if hit[l] { facts.p[k][l] } else { 0.0 };
-            out.geo_normal[k][l] = if hit[l] { facts.n[k][l] } else { 0.0 };
-            out.normal[k][l] = if hit[l] { facts.ns[k][l] } else { 0.0 };
+            out.position[k][l] = if hit[l] {
+                facts.p[k][l]
+            } else {
+                out.position[k][l]
+            };
+            out.geo_normal[k][l] = if hit[l] {
+                facts.n[k][l]
+            } else {
+                out.geo_normal[k][l]
+            };
+            out.normal[k][l] = if hit[l] {
+                facts.ns[k][l]
+            } else {
+                out.normal[k][l]
+            };
         }
     }
     // kd, gathered only where a lane hit (elsewhere the material is not an index).
