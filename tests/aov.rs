@@ -242,9 +242,9 @@ fn gpu_aovs_equal_the_mirror_in_every_bit() {
 
 /// The CPU's AOV packets (`packet::aov_tracer`, and `colour_aov_tracer` with the colour,
 /// what a render uses) give the mirror's records in every bit, and the colour traced with
-/// them is the colour traced alone, on scenes with textures, smooth normals, spheres, the BVH and
-/// without it, and frames whose sides are not whole packets. The twin: a record changed
-/// is seen.
+/// them is the colour traced alone, on scenes with textures, smooth normals, spheres,
+/// instances, the BVH and without it, and frames whose sides are not whole packets. The
+/// twin: a record changed is seen.
 #[test]
 fn aov_packets_equal_the_mirror() {
     for name in [
@@ -257,6 +257,7 @@ fn aov_packets_equal_the_mirror() {
         "suzanne-ply",
         "sphere",
         "triangle",
+        "suzanne-instances",
     ] {
         let scene = seed_scene(name);
         let (buf, spec) = buffers(&scene, 67, 45, scene.triangle);

@@ -90,7 +90,7 @@ pub const PACKET_BRUTE_FORCE_MAX: usize = 2;
 fn packet_globals(buf: &SceneBuffers, spec: Specialisation) -> Globals<'_, f32> {
     let prims = buf.spheres.len() + buf.triangles.len();
     let bvh = spec.use_bvh || (buf.params.n_nodes > 0 && prims > PACKET_BRUTE_FORCE_MAX);
-    if bvh && !spec.instances {
+    if bvh || spec.instances {
         // Made here, once, on every thread (not by the first packet that asks, while the
         // other threads wait).
         buf.leaf_triangles();
@@ -138,11 +138,10 @@ fn packet_rows_into(
     const PW: usize = packet::PACKET_W as usize;
     let (pw, ph) = (PW, packet::PACKET_H as usize);
     let band = ph * w as usize;
-    // Instances: the packets do not take the two levels yet; each lane is the mirror's.
-    let trace: packet::PacketFn = if g.spec.light_kinds || g.spec.textures || g.spec.instances {
+    let trace: packet::PacketFn = if g.spec.light_kinds || g.spec.textures {
         packet::trace_packet_mirror
     } else {
-        packet::tracer(simd)
+        packet::tracer(simd, g.spec.instances)
     };
     pixels
         .par_chunks_mut(band)
@@ -284,7 +283,7 @@ pub fn render_f32_progress(
 /// is taken as given (not raised by [`PACKET_BRUTE_FORCE_MAX`]), so that tests reach the
 /// packet tracer's search over every primitive on scenes of any size.
 pub fn render_f32_simd(buf: &SceneBuffers, spec: Specialisation, simd: packet::Simd) -> Image {
-    if spec.use_bvh && !spec.instances {
+    if spec.use_bvh || spec.instances {
         buf.leaf_triangles(); // as in `packet_globals`
     }
     let g = globals_f32(buf, spec);
@@ -346,11 +345,8 @@ pub fn render_aov_rows(
     if let Some(s) = f64_scene {
         return aov_rows_with(&globals_f64(s, buf, spec), y0, rows);
     }
-    if spec.instances {
-        return aov_rows_with(&globals_f32(buf, spec), y0, rows);
-    }
     let g = packet_globals(buf, spec);
-    let trace = packet::aov_tracer(packet::Simd::Best);
+    let trace = packet::aov_tracer(packet::Simd::Best, g.spec.instances);
     let w = g.cam.width as usize;
     let (pw, ph) = (packet::PACKET_W as usize, packet::PACKET_H as usize);
     let mut out: Vec<AovOut> = bytemuck::zeroed_vec(w * rows as usize);
@@ -406,7 +402,7 @@ pub fn render_f32_rows_aov<S: RecordRows>(
     let w = buf.params.width as usize;
     let ph = packet::PACKET_H as usize;
     debug_assert_eq!(blocks.len(), (rows as usize).div_ceil(ph));
-    if spec.antialias || spec.textures || spec.light_kinds || spec.instances {
+    if spec.antialias || spec.textures || spec.light_kinds {
         let records = render_aov_rows(None, buf, spec, y0, rows);
         for (b, mut block) in blocks.into_iter().enumerate() {
             for (r, row) in records[b * ph * w..].chunks(w.max(1)).take(ph).enumerate() {
@@ -416,7 +412,7 @@ pub fn render_f32_rows_aov<S: RecordRows>(
         return render_f32_rows(buf, spec, y0, rows);
     }
     let g = packet_globals(buf, spec);
-    let trace = packet::colour_aov_tracer(packet::Simd::Best);
+    let trace = packet::colour_aov_tracer(packet::Simd::Best, g.spec.instances);
     const PW: usize = packet::PACKET_W as usize;
     let mut colours = vec![[0.0f32; 4]; w * rows as usize];
     colours

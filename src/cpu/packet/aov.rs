@@ -6,7 +6,7 @@
 // Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
 #![allow(clippy::needless_range_loop)]
 
-use super::common::{Build, LANES};
+use super::common::{Build, InstLanes, LANES};
 use super::shade::HitLanes;
 use super::trace::{PacketHits, camera_rays, closest_hit_packet, sample_packet_hits};
 use crate::buffers::{AovOut, PRIM_NONE};
@@ -28,7 +28,7 @@ pub(super) fn aov_packet_body<B: Build>(b: B, g: &Globals<f32>, i: u32, j: u32) 
 fn records(
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
-    found: &PacketHits,
+    found: &PacketHits<impl InstLanes>,
     active: super::common::Mask,
 ) -> [AovOut; LANES] {
     let mut out = [MISS; LANES];

@@ -4,6 +4,7 @@
 // Lane loops index several arrays in step, `for l in 0..LANES`, the form LLVM vectorises.
 #![allow(clippy::needless_range_loop)]
 
+use crate::cpu::instance::map_point;
 use crate::shared::real::V3;
 
 /// Rays per packet.
@@ -33,6 +34,8 @@ pub(super) trait Origins {
     /// The origins with their components reordered: component i of the result is
     /// component `k[i]` of the original.
     fn permuted(&self, k: [usize; 3]) -> Self;
+    /// Each lane's origin mapped by the affine map `m` (the mirror's `map_point`).
+    fn mapped(&self, m: &[[f32; 4]; 3]) -> Self;
 }
 
 /// One origin for every lane (camera rays): LLVM hoists `rel` out of the lane loops.
@@ -55,6 +58,10 @@ impl Origins for Shared {
     fn permuted(&self, k: [usize; 3]) -> Self {
         let o = [self.0.x, self.0.y, self.0.z];
         Shared(V3::new(o[k[0]], o[k[1]], o[k[2]]))
+    }
+    #[inline(always)]
+    fn mapped(&self, m: &[[f32; 4]; 3]) -> Self {
+        Shared(map_point(m, self.0))
     }
 }
 
@@ -85,6 +92,15 @@ impl Origins for PerLane {
     #[inline(always)]
     fn permuted(&self, k: [usize; 3]) -> Self {
         PerLane([self.0[k[0]], self.0[k[1]], self.0[k[2]]])
+    }
+    #[inline(always)]
+    fn mapped(&self, m: &[[f32; 4]; 3]) -> Self {
+        let mut out = [[0.0f32; LANES]; 3];
+        for l in 0..LANES {
+            let p = map_point(m, V3::new(self.0[0][l], self.0[1][l], self.0[2][l]));
+            [out[0][l], out[1][l], out[2][l]] = [p.x, p.y, p.z];
+        }
+        PerLane(out)
     }
 }
 
@@ -183,8 +199,57 @@ pub(super) fn mask_of(flags: &[bool; LANES]) -> Mask {
 /// constructor whose caller vouches for the CPU, so safe code cannot run their
 /// instructions where the CPU lacks them.
 pub(super) trait Build: Copy {
+    /// Whether this build searches the two levels of a scene with instances (`Two`):
+    /// a constant, so that the one-level build holds no code of the two levels.
+    const INSTANCES: bool = false;
+    /// The instance of each lane's hit: `()` without instances (nothing to carry), else a
+    /// lane array.
+    type Inst: InstLanes;
     /// The lanes where `a[l] <= b[l]`.
     fn le_mask(self, a: &[f32; LANES], b: &[f32; LANES]) -> Mask;
+}
+
+/// Each lane's hit's instance, as a packet's hits carry it.
+pub(super) trait InstLanes: Copy + Default {
+    /// Lane l's instance.
+    fn lane(&self, l: usize) -> u32;
+    /// Sets lane l's instance.
+    fn set(&mut self, l: usize, inst: u32);
+}
+
+/// No instances: every hit is of instance 0.
+impl InstLanes for () {
+    #[inline(always)]
+    fn lane(&self, _l: usize) -> u32 {
+        0
+    }
+    #[inline(always)]
+    fn set(&mut self, _l: usize, _inst: u32) {}
+}
+
+impl InstLanes for [u32; LANES] {
+    #[inline(always)]
+    fn lane(&self, l: usize) -> u32 {
+        self[l]
+    }
+    #[inline(always)]
+    fn set(&mut self, l: usize, inst: u32) {
+        self[l] = inst;
+    }
+}
+
+/// Build `B` for scenes with instances: the two-level searches and the shading of
+/// instanced hits.
+#[derive(Clone, Copy)]
+pub(super) struct Two<B>(pub(super) B);
+
+impl<B: Build> Build for Two<B> {
+    const INSTANCES: bool = true;
+    type Inst = [u32; LANES];
+    #[inline(always)]
+    fn le_mask(self, a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
+        self.0.le_mask(a, b)
+    }
 }
 
 /// The baseline build: `mask_of`.
@@ -192,6 +257,7 @@ pub(super) trait Build: Copy {
 pub(super) struct Portable;
 
 impl Build for Portable {
+    type Inst = ();
     #[inline(always)]
     fn le_mask(self, a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
         let mut f = [false; LANES];
@@ -227,6 +293,7 @@ impl Avx2 {
 
 #[cfg(target_arch = "x86_64")]
 impl Build for Avx2 {
+    type Inst = ();
     #[inline(always)]
     fn le_mask(self, a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
         // SAFETY: `self` proves that the CPU has AVX2.
@@ -283,6 +350,7 @@ impl Avx512 {
 
 #[cfg(target_arch = "x86_64")]
 impl Build for Avx512 {
+    type Inst = ();
     #[inline(always)]
     fn le_mask(self, a: &[f32; LANES], b: &[f32; LANES]) -> Mask {
         // SAFETY: `self` proves that the CPU has AVX-512 F.

@@ -124,6 +124,22 @@ pub(super) fn pick(v: &[f32; 3], k: u32) -> f32 {
     }
 }
 
+/// The mirror's `hit_prim` for one lane, out of line: the packets call it only where a
+/// triangle is not in hand (a scene whose triangles are all tested one by one, never in a
+/// render's BVH), and a call marked cold keeps the lane loops' registers as they are.
+#[cold]
+#[inline(never)]
+pub(super) fn hit_prim_lane(
+    g: &Globals<f32>,
+    ray: Ray<f32>,
+    sh: crate::cpu::prims::Shear<f32>,
+    id: u32,
+    t_min: f32,
+    t_max: f32,
+) -> (f32, f32, f32) {
+    hit_prim(g, ray, sh, id, t_min, t_max)
+}
+
 /// The sheared vertices (ax, ay, bx, by, cx, cy) of `hit_triangle_watertight` for lane l,
 /// from the vertices relative to the origin.
 #[inline(always)]
@@ -491,7 +507,7 @@ pub(super) fn prim_lanes<O: Origins>(
     while m != 0 {
         let l = m.trailing_zeros() as usize;
         m &= m - 1;
-        (h.t[l], h.u[l], h.v[l]) = hit_prim(g, ray(l), sh.lane(l), id, t_min, t_max[l]);
+        (h.t[l], h.u[l], h.v[l]) = hit_prim_lane(g, ray(l), sh.lane(l), id, t_min, t_max[l]);
     }
     h
 }

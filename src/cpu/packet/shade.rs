@@ -4,14 +4,17 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::common::{
-    Build, LANES, Mask, Origins, choose, dot_lane, flush_nonneg, mask_of, normalize_lanes,
+    Build, InstLanes, LANES, Mask, Origins, choose, dot_lane, flush_nonneg, mask_of,
+    normalize_lanes,
 };
+use super::instance::occluded_top_lanes;
 use super::prims::{prim_material, prim_normal, triangle_normal};
 use super::trace::{NO_SLOT, PacketHits, occluded_lanes};
 use crate::buffers::{
     Light, MODEL_AMBIENT, MODEL_PHONG, Material, PRIM_NONE, TRIANGLE_BIT, Triangle,
 };
 use crate::cpu::common::{Globals, clamp01, max0};
+use crate::cpu::instance::triangle_of;
 use crate::cpu::prims::shading_at;
 use crate::cpu::trace::{phong_power, shadow_origin};
 use crate::shared::real::V3;
@@ -81,7 +84,7 @@ pub(super) fn shade_lanes<B: Build, O: Origins, F: Facts>(
     g: &Globals<f32>,
     origins: &O,
     dir: &[[f32; LANES]; 3],
-    found: &PacketHits,
+    found: &PacketHits<B::Inst>,
     mask: Mask,
     facts: &mut F,
 ) -> [[f32; LANES]; 3] {
@@ -104,7 +107,9 @@ pub(super) fn shade_lanes<B: Build, O: Origins, F: Facts>(
     // lane, the values the lane loops would have found lane by lane. Copied lane by lane
     // (16 scalar stores read back as vectors) they were a third of the 2-triangle frame.
     let prim0 = found.prim[first];
-    let mut one_prim = true;
+    // An instance's triangle is mapped to world space and may take the instance's
+    // material: gathered lane by lane below.
+    let mut one_prim = !B::INSTANCES;
     for l in 0..LANES {
         one_prim &= (mask >> l) & 1 == 0 || found.prim[l] == prim0;
     }
@@ -150,7 +155,19 @@ pub(super) fn shade_lanes<B: Build, O: Origins, F: Facts>(
         for l in 0..LANES {
             let s = src(l);
             let prim = found.prim[s];
-            if (prim & TRIANGLE_BIT) != 0 {
+            if (prim & TRIANGLE_BIT) != 0 && B::INSTANCES {
+                // `triangle_of`: the corners in world space, the instance's material.
+                let tri = triangle_of(g, &found.hit(s));
+                let (a, bb, c): ([f32; 3], [f32; 3], [f32; 3]) =
+                    (tri.a.into(), tri.b.into(), tri.c.into());
+                for k in 0..3 {
+                    corners[0][k][l] = a[k];
+                    corners[1][k][l] = bb[k];
+                    corners[2][k][l] = c[k];
+                }
+                material[l] = tri.material;
+                is_tri[l] = true;
+            } else if (prim & TRIANGLE_BIT) != 0 {
                 let tri = tri_of(s);
                 for k in 0..3 {
                     corners[0][k][l] = tri.a[k];
@@ -279,7 +296,15 @@ pub(super) fn shade_lanes<B: Build, O: Origins, F: Facts>(
                     [sd[0][l], sd[1][l], sd[2][l]] = [d.x, d.y, d.z];
                     skip[l] = found.prim[l];
                 }
-                on &= !occluded_lanes::<B>(b, g, so, &sd, &skip, on);
+                on &= !if B::INSTANCES {
+                    let mut skip_inst = [0u32; LANES];
+                    for l in 0..LANES {
+                        skip_inst[l] = found.inst.lane(l);
+                    }
+                    occluded_top_lanes::<B>(b, g, so, &sd, &skip, &skip_inst, on)
+                } else {
+                    occluded_lanes::<B>(b, g, so, &sd, &skip, on)
+                };
             }
             // Each lit lane's sum, chosen per lane by bit selects (`choose`: the same value
             // the branch gave; with the flush inside, LLVM made the branch a scalar loop).

@@ -6,18 +6,18 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::common::{
-    Build, LANES, Lanes, Mask, Origins, PACKET_W, PerLane, Shared, choose, choose_bits,
+    Build, InstLanes, LANES, Lanes, Mask, Origins, PACKET_W, PerLane, Shared, choose, choose_bits,
     flush_nonneg, mask_of,
 };
+use super::instance::closest_hit_top_lanes;
 use super::prims::{
-    ShearLanes, leaf_triangle, prim_lanes, shear_lanes, sphere_lanes, triangle_lanes,
+    ShearLanes, hit_prim_lane, leaf_triangle, prim_lanes, shear_lanes, sphere_lanes, triangle_lanes,
 };
 use super::shade::{Facts, shade_lanes};
 use crate::buffers::{
     BOX_SLACK, BvhNode, INFINITY, PRIM_NONE, TRIANGLE_BIT, TRIANGLE_WATERTIGHT, Triangle,
 };
 use crate::cpu::common::{BVH_STACK, Globals, Hit, Ray};
-use crate::cpu::prims::hit_prim;
 use crate::cpu::trace::{finite_bound, nearer, sample_offset, tie_bound};
 use crate::shared::real::V3;
 
@@ -145,7 +145,7 @@ pub(super) fn closest_hit_all_lanes<O: Origins>(
     sh: &ShearLanes,
     mask: Mask,
     t_min: f32,
-    best: &mut PacketHits,
+    best: &mut PacketHits<impl InstLanes>,
 ) {
     if g.spec.has_spheres {
         // Each lane's nearest t and sphere so far (misses keep t_max).
@@ -205,7 +205,7 @@ pub const NO_SLOT: u32 = u32::MAX;
 /// What `closest_hit_packet` finds: each lane's hit, as `closest_hit` gives it, as
 /// structure of arrays (the shading's lane loops read them in step; as an array of
 /// `Hit`s they were written and read back a lane at a time).
-pub struct PacketHits {
+pub(super) struct PacketHits<I> {
     /// Each lane's `Hit::t`.
     pub t: [f32; LANES],
     /// Each lane's `Hit::prim`.
@@ -214,12 +214,14 @@ pub struct PacketHits {
     pub u: [f32; LANES],
     /// Each lane's `Hit::v`.
     pub v: [f32; LANES],
+    /// Each lane's `Hit::inst`: `()` where the scene has no instances (instance 0).
+    pub inst: I,
     /// Each lane's hit triangle's index in `leaf_triangles` (the same triangle as
     /// `triangles[hit.prim]`, in memory the traversal has just read), or `NO_SLOT`.
     pub slots: [u32; LANES],
 }
 
-impl PacketHits {
+impl<I: InstLanes> PacketHits<I> {
     /// Lane l's hit.
     #[inline(always)]
     pub fn hit(&self, l: usize) -> Hit<f32> {
@@ -228,7 +230,7 @@ impl PacketHits {
             prim: self.prim[l],
             u: self.u[l],
             v: self.v[l],
-            inst: 0,
+            inst: self.inst.lane(l),
         }
     }
 }
@@ -301,7 +303,7 @@ pub(super) fn descend<B: Build, O: Origins>(
 /// 1M-triangle frame.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn blocking_lanes(
+pub(super) fn blocking_lanes(
     g: &Globals<f32>,
     r: &Lanes<PerLane>,
     sh: &ShearLanes,
@@ -340,7 +342,7 @@ fn blocking_lanes(
             origin: V3::new(r.origin.0[0][l], r.origin.0[1][l], r.origin.0[2][l]),
             dir: V3::new(r.dir[0][l], r.dir[1][l], r.dir[2][l]),
         };
-        if id != skip[l] && hit_prim(g, ray, sh.lane(l), id, t_min, t_max).0 < t_max {
+        if id != skip[l] && hit_prim_lane(g, ray, sh.lane(l), id, t_min, t_max).0 < t_max {
             out |= 1 << l;
         }
     }
@@ -454,12 +456,13 @@ pub(super) fn closest_hit_packet<B: Build>(
     active: Mask,
     t_min: f32,
     t_max: f32,
-) -> PacketHits {
+) -> PacketHits<B::Inst> {
     let out = PacketHits {
         t: [t_max; LANES],
         prim: [PRIM_NONE; LANES],
         u: [0.0; LANES],
         v: [0.0; LANES],
+        inst: B::Inst::default(),
         slots: [NO_SLOT; LANES],
     };
     if active == 0 {
@@ -482,8 +485,11 @@ pub(super) fn closest_hit_lanes<B: Build, O: Origins>(
     sh: &ShearLanes,
     active: Mask,
     t_min: f32,
-    mut out: PacketHits,
-) -> PacketHits {
+    mut out: PacketHits<B::Inst>,
+) -> PacketHits<B::Inst> {
+    if B::INSTANCES {
+        return closest_hit_top_lanes::<B, O>(b, g, rays, r, sh, active, t_min, out);
+    }
     let t_max = out.t[0];
     if !g.spec.use_bvh {
         closest_hit_all_lanes(g, rays, r, sh, active, t_min, &mut out);
@@ -670,6 +676,7 @@ pub(super) fn sample_packet<B: Build>(
 /// [`sample_packet`], with the camera rays, their hits and the lanes inside the image, for
 /// a caller that describes the hits further (the AOVs of the same rays), with what the
 /// shading found of the hits in `facts` (`shade_lanes`).
+#[allow(clippy::type_complexity)]
 #[inline(always)]
 pub(super) fn sample_packet_hits<B: Build, F: Facts>(
     b: B,
@@ -679,7 +686,12 @@ pub(super) fn sample_packet_hits<B: Build, F: Facts>(
     dx: f32,
     dy: f32,
     facts: &mut F,
-) -> ([[f32; 4]; LANES], [Ray<f32>; LANES], PacketHits, Mask) {
+) -> (
+    [[f32; 4]; LANES],
+    [Ray<f32>; LANES],
+    PacketHits<B::Inst>,
+    Mask,
+) {
     let (rays, dir, active) = camera_rays(g, i, j, dx, dy);
     let found = closest_hit_packet::<B>(b, g, &rays, &dir, active, 0.0, f32::MAX);
     let mut hit = [false; LANES];

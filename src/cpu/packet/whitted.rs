@@ -30,7 +30,7 @@ pub(super) fn secondary_lanes<B: Build>(
     b: B,
     g: &Globals<f32>,
     rays: &[Ray<f32>; LANES],
-    found: &PacketHits,
+    found: &PacketHits<B::Inst>,
     mask: Mask,
     out: &mut [[f32; 4]; LANES],
 ) {
@@ -118,6 +118,7 @@ pub(super) fn secondary_lanes<B: Build>(
             prim: [PRIM_NONE; LANES],
             u: [0.0; LANES],
             v: [0.0; LANES],
+            inst: B::Inst::default(),
             slots: [NO_SLOT; LANES],
         };
         let hits = closest_hit_lanes::<B, _>(b, g, &lane_rays, &r, &sh, live, 0.0, none);
